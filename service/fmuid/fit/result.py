@@ -1,0 +1,129 @@
+"""The result of a fit: estimates, chi2, the sigmas used and what it cost."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Cost:
+    """What a stage cost: FMU simulations run and wall time in seconds."""
+
+    simulations: int
+    seconds: float
+
+    def to_dict(self) -> dict[str, float]:
+        """Return the JSON form ``{"simulations": ..., "seconds": ...}``."""
+        return {"simulations": int(self.simulations), "seconds": round(float(self.seconds), 3)}
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Best-fit parameters of a study.
+
+    Attributes
+    ----------
+    fmu_sha256, model_name
+        Which FMU was fitted.
+    names
+        Free parameter names, in the order of ``z``.
+    scales
+        ``"log"`` or ``"lin"`` per free parameter.
+    lower, upper
+        Bounds per free parameter, in parameter units.
+    estimates
+        Best-fit value per free parameter, in parameter units.
+    chi2
+        Weighted sum of squared residuals at the estimate (thesis eq. 2.20).
+    n_data
+        Number of fitted data points (residuals).
+    sigma
+        The sigma used per output (a representative value: the median for per-sample sigmas).
+    sigma_method
+        How each output's sigma was obtained: ``"given"``, ``"column"`` or ``"estimate: ..."``.
+    jacobian
+        Weighted residual Jacobian with respect to ``z`` (the fitted, possibly log, coordinates)
+        at the estimate, shape ``(n_data, n_free)``.
+    fixed
+        Values of the FMU parameters that were set but not fitted.
+    global_search
+        Whether the genetic algorithm gave the start of the trust-region refinement.
+    message
+        The optimiser's final message.
+    cost
+        Simulations and wall time of the fit.
+    """
+
+    fmu_sha256: str
+    model_name: str
+    names: tuple[str, ...]
+    scales: tuple[str, ...]
+    lower: dict[str, float]
+    upper: dict[str, float]
+    estimates: dict[str, float]
+    chi2: float
+    n_data: int
+    sigma: dict[str, float]
+    sigma_method: dict[str, str]
+    jacobian: np.ndarray = field(repr=False)
+    fixed: dict[str, float] = field(default_factory=dict)
+    global_search: bool = True
+    message: str = ""
+    cost: Cost = Cost(0, 0.0)
+
+    def z_estimate(self) -> np.ndarray:
+        """Return the estimate in fitted coordinates (log10 for log-scaled parameters)."""
+        return np.array(
+            [
+                np.log10(self.estimates[n]) if s == "log" else self.estimates[n]
+                for n, s in zip(self.names, self.scales, strict=True)
+            ]
+        )
+
+    def fisher_sd_z(self) -> dict[str, float]:
+        """Return the asymptotic standard deviation of each parameter in fitted coordinates.
+
+        From the Gauss-Newton approximation ``chi2(z) ~ chi2 + dz' J'J dz``, the profile of
+        parameter ``i`` rises as ``dz_i**2 / C_ii`` with ``C = (J'J)^-1``; ``sqrt(C_ii)`` is
+        returned (``inf`` for a singular direction).
+        """
+        jtj = self.jacobian.T @ self.jacobian
+        cov = np.linalg.pinv(jtj, rcond=1e-12)
+        sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        u, s, _ = np.linalg.svd(jtj)
+        singular = s < s.max() * 1e-12 if s.size else np.zeros(0, bool)
+        out = {}
+        for i, name in enumerate(self.names):
+            weak = bool(np.any(np.abs(u[i, singular]) > 1e-3)) if singular.any() else False
+            out[name] = float("inf") if weak or sd[i] == 0 else float(sd[i])
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form written by ``fmuid fit``."""
+        return {
+            "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name},
+            "n_data": self.n_data,
+            "chi2": float(self.chi2),
+            "sigma": {k: float(v) for k, v in self.sigma.items()},
+            "sigma_method": dict(self.sigma_method),
+            "parameters": {
+                n: {
+                    "estimate": float(self.estimates[n]),
+                    "lower": float(self.lower[n]),
+                    "upper": float(self.upper[n]),
+                    "scale": s,
+                    "at_bound": bool(
+                        np.isclose(self.estimates[n], self.lower[n], rtol=1e-6)
+                        or np.isclose(self.estimates[n], self.upper[n], rtol=1e-6)
+                    ),
+                }
+                for n, s in zip(self.names, self.scales, strict=True)
+            },
+            "fixed": {k: float(v) for k, v in self.fixed.items()},
+            "global_search": self.global_search,
+            "message": self.message,
+            "cost": self.cost.to_dict(),
+        }
