@@ -1,0 +1,24 @@
+"""Matplotlib figures drawn from fmuid results; every function returns a ``Figure``.
+
+The figures follow the thesis: profile likelihoods (Figs 2.8, 3.3), parameter paths along a
+profile (Fig 2.9), confidence-interval compilations (Figs 3.4, 3.9, 3.10), trajectory bands
+(Figs 2.12, 3.5) and fit overlays with residual diagnostics (Figs 3.11, 3.12). Figures are
+built on ``matplotlib.figure.Figure`` directly (Agg canvas, no pyplot state) and never shown.
+"""
+
+from fmuid.plots.compilation import CiEntry, ci_compilation_figure, ci_entries_from_profile
+from fmuid.plots.fit import fit_figure, residual_series
+from fmuid.plots.profile import parameter_paths_figure, profile_figure
+from fmuid.plots.trajectory import parameter_sets_in_ci, trajectory_band_figure
+
+__all__ = [
+    "CiEntry",
+    "ci_compilation_figure",
+    "ci_entries_from_profile",
+    "fit_figure",
+    "parameter_paths_figure",
+    "parameter_sets_in_ci",
+    "profile_figure",
+    "residual_series",
+    "trajectory_band_figure",
+]

@@ -1,0 +1,138 @@
+"""Fit overlay and residual diagnostics (thesis Figs 3.11, 3.12)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from matplotlib.figure import Figure
+from scipy import stats
+
+from fmuid.fit.result import FitResult
+from fmuid.plots._common import DATA_COLOR, MODEL_COLOR
+
+if TYPE_CHECKING:
+    from fmuid.fit.problem import Problem
+
+
+@dataclass(frozen=True)
+class ResidualSeries:
+    """Data, model and weighted residuals of one output in one experiment.
+
+    Attributes
+    ----------
+    experiment, output
+        Names.
+    time
+        Times of the fitted rows [s].
+    data, model
+        Measured and simulated values there.
+    weighted
+        ``(data - model) / sigma``.
+
+    """
+
+    experiment: str
+    output: str
+    time: np.ndarray
+    data: np.ndarray
+    model: np.ndarray
+    weighted: np.ndarray
+
+
+def residual_series(problem: Problem, values: Mapping[str, float]) -> list[ResidualSeries]:
+    """Simulate at ``values`` and pair the model with the data of every fitted output.
+
+    Parameters
+    ----------
+    problem
+        The fitting problem (experiments, sigma, predictions).
+    values
+        Free parameter values (parameter units).
+
+    Returns
+    -------
+    list of ResidualSeries
+        One per experiment and fitted output, in the problem's order.
+
+    """
+    out = []
+    predicted = problem.predict(values)
+    for i, (exp, model) in enumerate(zip(problem.experiments, predicted, strict=True)):
+        for j, output in enumerate(problem.outputs):
+            mask = problem.masks[i][j]
+            if not mask.any():
+                continue
+            data = problem.data[i][j]
+            sim = np.asarray(model[output])[mask]
+            sig = np.asarray(problem.sigma[i][output], dtype=float)[mask]
+            out.append(
+                ResidualSeries(exp.name, output, exp.time[mask], data, sim, (data - sim) / sig)
+            )
+    return out
+
+
+def fit_figure(problem: Problem, fit: FitResult | Mapping[str, Any]) -> Figure:
+    """Draw data against the fitted model and the weighted residuals' diagnostics.
+
+    One row per experiment and fitted output with four panels: the time history (data as
+    blue dots, model as a red line), the weighted residuals ``(data - model) / sigma`` against
+    time, their normal Q-Q plot (with the line y = x) and their histogram with the standard
+    normal density.
+
+    Parameters
+    ----------
+    problem
+        The fitting problem the fit was made on.
+    fit
+        The fit, or a mapping of free parameter values.
+
+    Returns
+    -------
+    Figure
+        ``4 * (experiments x outputs)`` panels.
+
+    """
+    values = fit.estimates if isinstance(fit, FitResult) else dict(fit)
+    series = residual_series(problem, values)
+    fig = Figure(figsize=(14.0, 2.8 * max(1, len(series))), layout="constrained")
+    grid = fig.subplots(max(1, len(series)), 4, squeeze=False)
+    for row, s in zip(grid, series, strict=False):
+        ax_t, ax_r, ax_q, ax_h = row
+        ax_t.plot(s.time, s.data, ".", color=DATA_COLOR, ms=4, label="data", gid="data")
+        order = np.argsort(s.time)
+        ax_t.plot(
+            s.time[order], s.model[order], color=MODEL_COLOR, lw=1.3, label="model", gid="model"
+        )
+        ax_t.set_title(f"{s.experiment}: {s.output}", fontsize=9)
+        ax_t.set_xlabel("time [s]")
+        ax_t.set_ylabel(s.output)
+        ax_t.legend(fontsize=7)
+        ax_r.axhline(0.0, color="0.5", lw=0.8)
+        ax_r.plot(s.time, s.weighted, ".", color=DATA_COLOR, ms=4, gid="residuals")
+        ax_r.set_xlabel("time [s]")
+        ax_r.set_ylabel("weighted residual")
+        theo, ordered = _qq(s.weighted)
+        ax_q.plot(theo, ordered, ".", color=DATA_COLOR, ms=4, gid="qq")
+        if theo.size:
+            lim = [min(theo[0], ordered[0]), max(theo[-1], ordered[-1])]
+            ax_q.plot(lim, lim, color=MODEL_COLOR, lw=1.0, gid="qq_line")
+        ax_q.set_xlabel("normal quantile")
+        ax_q.set_ylabel("residual quantile")
+        ax_q.set_title("Q-Q plot", fontsize=9)
+        ax_h.hist(s.weighted, bins="auto", density=True, color=DATA_COLOR, alpha=0.7)
+        grid_x = np.linspace(-4.0, 4.0, 200)
+        ax_h.plot(grid_x, stats.norm.pdf(grid_x), color=MODEL_COLOR, lw=1.0)
+        ax_h.set_xlabel("weighted residual")
+        ax_h.set_title("histogram", fontsize=9)
+    return fig
+
+
+def _qq(residuals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return normal quantiles (Blom plotting positions) and the sorted residuals."""
+    n = residuals.size
+    ordered = np.sort(residuals)
+    theo = stats.norm.ppf((np.arange(1, n + 1) - 0.375) / (n + 0.25))
+    return theo, ordered

@@ -1,0 +1,181 @@
+"""Profile-likelihood figures: the profiles (thesis Fig 2.8/3.3) and parameter paths (Fig 2.9)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from fmuid.plots._common import (
+    BOUND_COLOR,
+    ESTIMATE_COLOR,
+    PROFILE_COLOR,
+    QUADRATIC_COLOR,
+    THRESHOLD_COLOR,
+    axis_label,
+    new_figure,
+    to_plot_coordinate,
+)
+from fmuid.profile.result import ParameterProfile, ProfileResult
+
+
+def profile_figure(result: ProfileResult, *, ncols: int = 3) -> Figure:
+    """Draw the profile likelihood of every free parameter, one panel each.
+
+    Each panel shows, against the parameter in fitted coordinates (log10 for log-scaled
+    parameters): the profile chi2 (black), its quadratic approximation
+    ``chi2_opt + ((z - z_hat) / sd_z)**2`` from the Fisher information (gray), the pointwise
+    and simultaneous thresholds ``chi2_opt + threshold`` (red dashed, lower and upper), the
+    estimate (gray asterisk), points where another parameter sat on a bound (red dots) and
+    points whose re-fit failed (black crosses at the bottom of the panel).
+
+    Parameters
+    ----------
+    result
+        The profile study.
+    ncols
+        Panels per row.
+
+    Returns
+    -------
+    Figure
+        One panel per parameter, in the order of ``result.parameters``.
+
+    """
+    names = list(result.parameters)
+    fig, axes = new_figure(len(names), ncols=ncols)
+    fisher = result.fit.fisher_sd_z()
+    for ax, name in zip(axes, names, strict=True):
+        prof = result.parameters[name]
+        sd = prof.fisher_sd_z if math.isfinite(prof.fisher_sd_z) else fisher.get(name, math.inf)
+        _draw_profile(ax, prof, result.chi2, result.thresholds, sd)
+    fig.suptitle(f"Profile likelihoods ({result.confidence:.0%} confidence)")
+    return fig
+
+
+def _draw_profile(
+    ax: Axes, prof: ParameterProfile, chi2_opt: float, thresholds: dict[str, float], sd_z: float
+) -> None:
+    ok = [p for p in prof.points if p.error is None and math.isfinite(p.chi2)]
+    failed = [p for p in prof.points if p.error is not None or not math.isfinite(p.chi2)]
+    x = np.array([to_plot_coordinate(p.value, prof.scale) for p in ok])
+    y = np.array([p.chi2 for p in ok])
+    z_hat = to_plot_coordinate(prof.estimate, prof.scale)
+    lo = to_plot_coordinate(prof.lower, prof.scale)
+    hi = to_plot_coordinate(prof.upper, prof.scale)
+    span = np.array([x.min(), x.max()]) if x.size else np.array([lo, hi])
+    ax.plot(x, y, color=PROFILE_COLOR, lw=1.5, label="profile", gid="profile")
+    if math.isfinite(sd_z) and sd_z > 0:
+        xq = np.linspace(span[0], span[1], 200)
+        ax.plot(
+            xq,
+            chi2_opt + ((xq - z_hat) / sd_z) ** 2,
+            color=QUADRATIC_COLOR,
+            lw=1.0,
+            label="quadratic approximation",
+            gid="quadratic",
+        )
+    for kind in ("pointwise", "simultaneous"):
+        if kind in thresholds:
+            ax.axhline(
+                chi2_opt + thresholds[kind],
+                color=THRESHOLD_COLOR,
+                ls="--",
+                lw=1.0,
+                label=f"{kind} threshold",
+                gid=f"threshold_{kind}",
+            )
+    bound = [(xi, yi) for xi, yi, p in zip(x, y, ok, strict=True) if p.at_bound]
+    if bound:
+        bx, by = zip(*bound, strict=True)
+        ax.plot(
+            bx, by, "o", color=BOUND_COLOR, ms=4, ls="none", label="other on bound", gid="at_bound"
+        )
+    ax.plot(
+        [z_hat],
+        [chi2_opt],
+        "*",
+        color=ESTIMATE_COLOR,
+        ms=11,
+        ls="none",
+        label="estimate",
+        gid="estimate",
+    )
+    if failed:
+        fx = [to_plot_coordinate(p.value, prof.scale) for p in failed]
+        ax.plot(
+            fx,
+            [0.03] * len(fx),
+            "x",
+            color="black",
+            ms=6,
+            ls="none",
+            transform=ax.get_xaxis_transform(),
+            label="failed point",
+            gid="failed",
+        )
+    top = chi2_opt + 2.0 * thresholds.get("simultaneous", 1.0)
+    if y.size and np.nanmax(y) < top:
+        top = float(np.nanmax(y)) + 0.1 * (top - chi2_opt)
+    ax.set_ylim(chi2_opt - 0.1 * (top - chi2_opt), top)
+    ax.set_xlabel(axis_label(prof.name, prof.scale))
+    ax.set_ylabel("chi2")
+    ax.set_title(f"{prof.name}: {prof.status.replace('_', ' ')}", fontsize=9)
+
+
+def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
+    """Draw how the other free parameters move along the profile of ``name`` (thesis Fig 2.9).
+
+    Every parameter is shown as its change from the estimate in fitted coordinates (decades for
+    log-scaled parameters), against the profiled parameter in fitted coordinates. A parameter
+    that trades against the profiled one (e.g. ``k1 + k2`` constant) shows as a sloped line;
+    points where it sat on a bound are red. The simultaneous confidence interval is shaded.
+
+    Parameters
+    ----------
+    result
+        The profile study.
+    name
+        The profiled parameter.
+
+    Returns
+    -------
+    Figure
+        One panel; one line per other free parameter, labelled with its name.
+
+    Raises
+    ------
+    KeyError
+        If ``name`` was not profiled.
+
+    """
+    prof = result.parameters[name]
+    fit = result.fit
+    others = [n for n in fit.names if n != name]
+    scales = dict(zip(fit.names, fit.scales, strict=True))
+    ok = [p for p in prof.points if p.error is None]
+    x = np.array([to_plot_coordinate(p.value, prof.scale) for p in ok])
+    fig = Figure(figsize=(6.0, 4.0), layout="constrained")
+    ax = fig.add_subplot()
+    for other in others:
+        ref = to_plot_coordinate(fit.estimates[other], scales[other])
+        y = np.array(
+            [to_plot_coordinate(p.params.get(other, math.nan), scales[other]) - ref for p in ok]
+        )
+        (line,) = ax.plot(x, y, marker=".", lw=1.2, label=other, gid=f"path_{other}")
+        on_bound = [i for i, p in enumerate(ok) if other in p.at_bound]
+        if on_bound:
+            ax.plot(x[on_bound], y[on_bound], "o", color=BOUND_COLOR, ms=4, ls="none")
+    lo, hi = prof.ci_simultaneous
+    x_lo = to_plot_coordinate(lo, prof.scale) if lo is not None else (x.min() if x.size else 0.0)
+    x_hi = to_plot_coordinate(hi, prof.scale) if hi is not None else (x.max() if x.size else 0.0)
+    ax.axvspan(x_lo, x_hi, color="0.9", zorder=0, label="simultaneous CI")
+    ax.axvline(to_plot_coordinate(prof.estimate, prof.scale), color=ESTIMATE_COLOR, ls=":", lw=1)
+    ax.set_xlabel(axis_label(name, prof.scale))
+    ax.set_ylabel("change from estimate (decades for log-scaled)")
+    ax.set_title(f"Parameters along the profile of {name}")
+    if others:
+        ax.legend(fontsize=8)
+    return fig
