@@ -55,6 +55,7 @@ class FitResult:
         The optimiser's final message.
     cost
         Simulations and wall time of the fit.
+
     """
 
     fmu_sha256: str

@@ -28,6 +28,7 @@ class ProfilePoint:
         Names of the other parameters sitting on a bound there.
     error
         Why the point failed, or ``None``.
+
     """
 
     value: float

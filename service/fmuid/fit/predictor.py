@@ -1,0 +1,89 @@
+"""Model predictions at the data's times: parameters + experiment -> FMU outputs."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+from fmuid.model.simulator import get_simulator
+
+from fmuid.data import Experiment
+
+
+class Predictor(Protocol):
+    """Anything that turns parameter values and an experiment into model outputs."""
+
+    def predict(
+        self, params: Mapping[str, float], experiment: Experiment, outputs: Sequence[str]
+    ) -> np.ndarray:
+        """Return the outputs at every row of ``experiment.time``, shape ``(rows, outputs)``."""
+        ...
+
+
+def merged_inputs(
+    experiment: Experiment, inputs: Sequence[str]
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Put every input on the union of their sample times.
+
+    Each input is linear between its own samples, so evaluating it at the union of all
+    breakpoints reproduces it exactly as a piecewise-linear signal.
+
+    Returns
+    -------
+    time, values
+        Sample times [s] and the value of each input there.
+
+    """
+    if not inputs:
+        return experiment.time[:1].copy(), {}
+    samples = {name: experiment.input_samples(name) for name in inputs}
+    time = np.unique(np.concatenate([t for t, _ in samples.values()]))
+    values = {name: np.interp(time, t, v) for name, (t, v) in samples.items()}
+    return time, values
+
+
+class FmuPredictor:
+    """Simulate an FMU with the fixed parameters of a spec and the experiment's inputs.
+
+    Parameters
+    ----------
+    fmu_path
+        The FMU file; each process keeps one warm instance of it (``get_simulator``).
+    fixed
+        FMU parameter values that are set in every run but not fitted.
+    inputs
+        Names of the FMU inputs driven from the experiments' columns.
+
+    """
+
+    def __init__(self, fmu_path: str | Path, fixed: Mapping[str, float], inputs: Sequence[str]):
+        self.fmu_path = str(fmu_path)
+        self.fixed = dict(fixed)
+        self.inputs = tuple(inputs)
+        self._inputs_cache: dict[int, tuple[Experiment, np.ndarray, dict[str, np.ndarray]]] = {}
+
+    def __getstate__(self) -> dict[str, object]:
+        """Pickle without the per-process input cache."""
+        state = dict(self.__dict__)
+        state["_inputs_cache"] = {}
+        return state
+
+    def inputs_of(self, experiment: Experiment) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Return the experiment's inputs on their merged sample times (cached)."""
+        cached = self._inputs_cache.get(id(experiment))
+        if cached is None or cached[0] is not experiment:
+            cached = (experiment, *merged_inputs(experiment, self.inputs))
+            self._inputs_cache[id(experiment)] = cached
+        return cached[1], cached[2]
+
+    def predict(
+        self, params: Mapping[str, float], experiment: Experiment, outputs: Sequence[str]
+    ) -> np.ndarray:
+        """Simulate the FMU and return ``outputs`` at every row of the experiment."""
+        input_time, input_values = self.inputs_of(experiment)
+        values = {**self.fixed, **params}
+        return get_simulator(self.fmu_path).simulate(
+            values, input_time, input_values, experiment.time, list(outputs)
+        )

@@ -1,0 +1,149 @@
+"""Run profile branches side by side: local worker processes or a dask.distributed cluster."""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import queue
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fmuid.fit.problem import Problem
+from fmuid.profile.walk import BranchResult, WalkOptions, walk_branch
+
+_PROGRESS_QUEUE: Any = None
+
+
+@dataclass(frozen=True)
+class BranchTask:
+    """Everything a worker needs to walk one branch."""
+
+    problem: Problem
+    z_hat: np.ndarray
+    chi2_hat: float
+    index: int
+    direction: int
+    threshold: float
+    sd_z: float
+    options: WalkOptions
+
+
+def run_branch(task: BranchTask) -> BranchResult:
+    """Walk one branch, reporting points to the parent process when it listens."""
+
+    def on_point(n: int) -> None:
+        if _PROGRESS_QUEUE is not None:
+            _PROGRESS_QUEUE.put((task.index, task.direction, n))
+
+    return walk_branch(
+        task.problem,
+        task.z_hat,
+        task.chi2_hat,
+        task.index,
+        task.direction,
+        task.threshold,
+        task.sd_z,
+        task.options,
+        on_point=on_point,
+    )
+
+
+def _init_worker(progress_queue: Any) -> None:
+    global _PROGRESS_QUEUE
+    _PROGRESS_QUEUE = progress_queue
+
+
+PointCallback = Callable[[int, int, int], None]
+
+
+def run_branches(
+    tasks: Sequence[BranchTask],
+    *,
+    workers: int | None = None,
+    executor: Any = None,
+    on_point: PointCallback | None = None,
+) -> list[BranchResult]:
+    """Walk every branch and return their results in the order of ``tasks``.
+
+    Parameters
+    ----------
+    tasks
+        The branches.
+    workers
+        Local worker processes (default: the CPU count, at most one per branch); 1 walks the
+        branches in this process.
+    executor
+        A ``dask.distributed.Client``: branches run as dask tasks on its workers, each worker
+        keeping its FMU instance warm between tasks. Overrides ``workers``.
+    on_point
+        Called with ``(parameter index, direction, points done in that branch)``.
+
+    """
+    if executor is not None:
+        return _run_dask(tasks, executor, on_point)
+    n = min(workers or os.cpu_count() or 1, len(tasks))
+    if n <= 1:
+        out = []
+        for task in tasks:
+
+            def report(k: int, task: BranchTask = task) -> None:
+                if on_point:
+                    on_point(task.index, task.direction, k)
+
+            out.append(
+                walk_branch(
+                    task.problem,
+                    task.z_hat,
+                    task.chi2_hat,
+                    task.index,
+                    task.direction,
+                    task.threshold,
+                    task.sd_z,
+                    task.options,
+                    on_point=report,
+                )
+            )
+        return out
+    ctx = multiprocessing.get_context("fork")
+    progress_queue = ctx.Queue()
+    with ProcessPoolExecutor(
+        n, mp_context=ctx, initializer=_init_worker, initargs=(progress_queue,)
+    ) as pool:
+        futures: list[Future[BranchResult]] = [pool.submit(run_branch, t) for t in tasks]
+        pending = set(futures)
+        while pending:
+            _, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            _drain(progress_queue, on_point)
+        _drain(progress_queue, on_point)
+        return [f.result() for f in futures]
+
+
+def _drain(progress_queue: Any, on_point: PointCallback | None) -> None:
+    while True:
+        try:
+            item = progress_queue.get_nowait()
+        except queue.Empty:
+            return
+        if on_point:
+            on_point(*item)
+
+
+def _run_dask(
+    tasks: Sequence[BranchTask], client: Any, on_point: PointCallback | None
+) -> list[BranchResult]:
+    from distributed import as_completed
+
+    futures = [client.submit(run_branch, t, pure=False) for t in tasks]
+    index = {f.key: k for k, f in enumerate(futures)}
+    results: list[BranchResult | None] = [None] * len(tasks)
+    for future in as_completed(futures):
+        k = index[future.key]
+        result = future.result()
+        results[k] = result
+        if on_point:
+            on_point(tasks[k].index, tasks[k].direction, len(result.points))
+    return [r for r in results if r is not None]
