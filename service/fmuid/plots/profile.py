@@ -157,7 +157,7 @@ def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
     scales = dict(zip(fit.names, fit.scales, strict=True))
     ok = [p for p in prof.points if p.error is None]
     x = np.array([to_plot_coordinate(p.value, prof.scale) for p in ok])
-    fig = Figure(figsize=(6.0, 4.0), layout="constrained")
+    fig = Figure(figsize=(5.0, 3.2), layout="constrained")
     ax = fig.add_subplot()
     for other in others:
         ref = to_plot_coordinate(fit.estimates[other], scales[other])

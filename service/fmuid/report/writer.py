@@ -1,0 +1,334 @@
+"""``write_report``: one self-contained ``index.html`` with PNG figures for any fmuid result."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import inspect
+import logging
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from matplotlib.figure import Figure
+
+from fmuid.errors import FmuidError
+from fmuid.fit.result import FitResult
+from fmuid.plots import (
+    fit_figure,
+    parameter_paths_figure,
+    profile_figure,
+    trajectory_band_figure,
+)
+from fmuid.profile.result import ProfileResult
+from fmuid.report.page import HtmlPage, interval
+
+if TYPE_CHECKING:
+    from fmuid.data import Experiment, Spec
+    from fmuid.fit.problem import Problem
+
+logger = logging.getLogger(__name__)
+
+
+def write_report(
+    result: FitResult | ProfileResult | Any,
+    directory: Path,
+    *,
+    fmu: Path | str | None = None,
+    experiments: Sequence[Experiment] | None = None,
+    spec: Spec | None = None,
+    problem: Problem | None = None,
+    extra_figures: Mapping[str, Figure] | None = None,
+) -> Path:
+    """Write an HTML report of a fit, a profile study or a diagnosis.
+
+    The page holds a summary table (per parameter: estimate, simultaneous and pointwise CI,
+    label, bounds), the study's numbers (chi2, number of data, thresholds, sigma and how it was
+    obtained, cost), the structural check, then the figures. When a fitting problem is given,
+    or can be built from ``fmu``, ``experiments`` and ``spec``, the fit overlay with residual
+    diagnostics and (for a profile) the trajectory band are drawn too. A diagnosis (any object
+    whose ``to_dict()`` follows the contract's "Diagnose result") shows its summary and the
+    figures of ``fmuid.diagnose.plots.figures`` when that function exists.
+
+    Parameters
+    ----------
+    result
+        ``FitResult``, ``ProfileResult`` or a diagnosis.
+    directory
+        Folder for ``index.html`` and the PNG files (created if missing).
+    fmu, experiments, spec
+        The study's inputs, to build the problem when ``problem`` is not given.
+    problem
+        The fitting problem the result was computed on.
+    extra_figures
+        More figures to append, by caption.
+
+    Returns
+    -------
+    Path
+        The ``index.html`` written.
+
+    """
+    if problem is None and fmu is not None and experiments is not None and spec is not None:
+        from fmuid.fit.problem import Problem
+
+        problem = Problem(fmu, experiments, spec)
+    if isinstance(result, ProfileResult):
+        page = HtmlPage(Path(directory), f"Profile likelihood: {result.fit.model_name}")
+        _profile_sections(page, result, problem)
+    elif isinstance(result, FitResult):
+        page = HtmlPage(Path(directory), f"Fit: {result.model_name}")
+        _fit_sections(page, result, problem)
+    else:
+        page = HtmlPage(Path(directory), "Model discrepancy diagnosis")
+        _diagnosis_sections(page, result, problem, experiments, spec, fmu)
+    for caption, fig in (extra_figures or {}).items():
+        page.figure(fig, f"extra_{caption}", caption)
+    return page.write()
+
+
+def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | None) -> None:
+    fit = result.fit
+    page.heading("Summary")
+    rows = []
+    for name, p in result.parameters.items():
+        label = p.status.replace("_", " ")
+        if p.limited_by:
+            label += f" (CI end set by {', '.join(p.limited_by)} on a bound)"
+        rows.append(
+            [
+                name,
+                p.estimate,
+                interval(p.ci_simultaneous),
+                interval(p.ci_pointwise),
+                label,
+                interval((p.lower, p.upper)),
+                p.scale,
+            ]
+        )
+    page.table(
+        [
+            "parameter",
+            "estimate",
+            f"CI simultaneous ({result.confidence:.0%})",
+            f"CI pointwise ({result.confidence:.0%})",
+            "label",
+            "bounds",
+            "scale",
+        ],
+        rows,
+        table_id="summary",
+        caption="Estimates and likelihood-based confidence intervals",
+    )
+    if result.better_optimum_found:
+        page.paragraph(
+            "A better optimum than the fit was found while profiling; the profiles were "
+            "recomputed from it.",
+            note=True,
+        )
+    _study_numbers(page, fit, result.confidence, result.thresholds, result.cost.to_dict())
+    _structural(page, result.structural_check)
+    page.heading("Figures")
+    page.figure(
+        profile_figure(result),
+        "profiles",
+        "Profile likelihoods (black), quadratic approximation (gray), pointwise and "
+        "simultaneous thresholds (red dashed), estimate (asterisk); red dots: another "
+        "parameter on a bound; crosses: failed points.",
+    )
+    for name in result.parameters:
+        page.figure(
+            parameter_paths_figure(result, name),
+            f"paths_{name}",
+            f"How the other parameters move along the profile of {name}.",
+        )
+    if problem is not None:
+        _try_figure(
+            page,
+            "fit",
+            "Data and fitted model; weighted residuals, Q-Q plot and histogram.",
+            lambda: fit_figure(problem, fit),
+        )
+        _try_figure(
+            page,
+            "trajectory_band",
+            "Outputs over parameter sets inside the simultaneous CI.",
+            lambda: trajectory_band_figure(problem, result),
+        )
+
+
+def _fit_sections(page: HtmlPage, fit: FitResult, problem: Problem | None) -> None:
+    page.heading("Summary")
+    info = fit.to_dict()["parameters"]
+    page.table(
+        ["parameter", "estimate", "label", "bounds", "scale"],
+        [
+            [
+                n,
+                fit.estimates[n],
+                "on a bound" if info[n]["at_bound"] else "inside bounds",
+                interval((fit.lower[n], fit.upper[n])),
+                s,
+            ]
+            for n, s in zip(fit.names, fit.scales, strict=True)
+        ],
+        table_id="summary",
+        caption="Best-fit parameters (run a profile study for confidence intervals)",
+    )
+    _study_numbers(page, fit, None, None, fit.cost.to_dict())
+    if fit.message:
+        page.paragraph(f"Optimiser: {fit.message}")
+    if problem is not None:
+        page.heading("Figures")
+        _try_figure(
+            page,
+            "fit",
+            "Data and fitted model; weighted residuals, Q-Q plot and histogram.",
+            lambda: fit_figure(problem, fit),
+        )
+
+
+def _study_numbers(
+    page: HtmlPage,
+    fit: FitResult,
+    confidence: float | None,
+    thresholds: Mapping[str, float] | None,
+    cost: Mapping[str, float],
+) -> None:
+    rows: list[list[object]] = [
+        ["model", f"{fit.model_name} (sha256 {fit.fmu_sha256[:12]})"],
+        ["chi2 at the optimum", fit.chi2],
+        ["number of data", fit.n_data],
+    ]
+    if confidence is not None and thresholds is not None:
+        rows.append(["confidence", confidence])
+        rows += [[f"threshold {k} (chi2 rise)", v] for k, v in thresholds.items()]
+    rows += [
+        [f"sigma {o}", f"{v:.4g} ({fit.sigma_method.get(o, '')})"] for o, v in fit.sigma.items()
+    ]
+    rows += [
+        ["global search", fit.global_search],
+        ["simulations", int(cost["simulations"])],
+        ["seconds", float(cost["seconds"])],
+    ]
+    page.table(["quantity", "value"], rows, table_id="study", caption="Study")
+
+
+def _structural(page: HtmlPage, check: Mapping[str, Any]) -> None:
+    page.heading("Structural check")
+    values = check.get("singular_values", [])
+    page.paragraph(
+        "Singular values of the weighted sensitivity matrix: "
+        + (", ".join(f"{v:.3g}" for v in values) if values else "none reported")
+    )
+    combos = check.get("non_identifiable_combinations", [])
+    if combos:
+        page.table(
+            ["parameters", "direction", "meaning"],
+            [
+                [
+                    ", ".join(c.get("parameters", [])),
+                    ", ".join(f"{d:.3g}" for d in c.get("direction", [])),
+                    c.get("meaning", ""),
+                ]
+                for c in combos
+            ],
+            table_id="structural",
+        )
+    else:
+        page.paragraph("No non-identifiable parameter combination was found.")
+
+
+def _diagnosis_sections(
+    page: HtmlPage,
+    diagnosis: Any,
+    problem: Problem | None,
+    experiments: Sequence[Experiment] | None,
+    spec: Spec | None,
+    fmu: Path | str | None,
+) -> None:
+    d = diagnosis.to_dict()
+    page.heading("Summary")
+    effect = d.get("effect")
+    page.table(
+        ["quantity", "value"],
+        [
+            ["mismatch", bool(d.get("mismatch"))],
+            ["effect", effect if effect is not None else "none"],
+            ["chi2 before", d.get("chi2_before")],
+            ["chi2 after", d.get("chi2_after")],
+        ],
+        table_id="diagnosis",
+    )
+    if d.get("description"):
+        page.paragraph(str(d["description"]))
+    loc = d.get("location") or {}
+    if loc:
+        page.table(
+            ["where", "value"],
+            [[k, _plain(v)] for k, v in loc.items()],
+            caption="Location of the mismatch",
+        )
+    page.table(
+        ["parameter", "before", "after"],
+        [[n, v.get("before"), v.get("after")] for n, v in d.get("parameters", {}).items()],
+        table_id="summary",
+        caption="Free parameters before and after the augmentation",
+    )
+    added = d.get("added_parameters") or {}
+    if added:
+        page.table(
+            ["added parameter", "estimate", "CI"],
+            [
+                [n, v.get("estimate"), interval(v.get("ci") or (None, None))]
+                for n, v in added.items()
+            ],
+            caption="Parameters of the added physics",
+        )
+    if d.get("evidence"):
+        keys = list(dict.fromkeys(k for e in d["evidence"] for k in e))
+        page.table(
+            keys, [[_plain(e.get(k)) for k in keys] for e in d["evidence"]], caption="Evidence"
+        )
+    if d.get("candidates"):
+        keys = list(dict.fromkeys(k for c in d["candidates"] for k in c))
+        page.table(
+            keys, [[_plain(c.get(k)) for k in keys] for c in d["candidates"]], caption="Candidates"
+        )
+    figures = _diagnose_figures(
+        diagnosis, problem=problem, experiments=experiments, spec=spec, fmu=fmu
+    )
+    if figures:
+        page.heading("Figures")
+        for caption, fig in figures.items():
+            page.figure(fig, f"diagnose_{caption}", caption)
+
+
+def _diagnose_figures(diagnosis: Any, **available: Any) -> dict[str, Figure]:
+    """Call ``fmuid.diagnose.plots.figures`` with the keyword arguments it accepts."""
+    if importlib.util.find_spec("fmuid.diagnose.plots") is None:
+        return {}
+    module = importlib.import_module("fmuid.diagnose.plots")
+    figures: Callable[..., dict[str, Figure]] | None = getattr(module, "figures", None)
+    if figures is None:
+        return {}
+    params = inspect.signature(figures).parameters
+    kwargs = {k: v for k, v in available.items() if k in params and v is not None}
+    return dict(figures(diagnosis, **kwargs))
+
+
+def _try_figure(page: HtmlPage, name: str, caption: str, draw: Callable[[], Figure]) -> None:
+    """Add a figure that needs simulations; a failed simulation is reported, not raised."""
+    try:
+        fig = draw()
+    except FmuidError as error:
+        logger.warning("figure %s not drawn: %s", name, error)
+        page.paragraph(f"Figure '{name}' could not be drawn: {error}", note=True)
+        return
+    page.figure(fig, name, caption)
+
+
+def _plain(value: object) -> object:
+    if isinstance(value, list | tuple):
+        return ", ".join(str(_plain(v)) for v in value)
+    return value
