@@ -1,0 +1,51 @@
+"""Where the built-in FMUs (compiled from ``model_src/``) live, building them on first use."""
+
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+
+from fmuid.errors import FmuError
+from fmuid.model.build import build_fmus
+
+logger = logging.getLogger(__name__)
+
+BUILTIN_MODELS = ("tractor_implement", "msd", "msd_parallel")
+
+
+def fmu_dir() -> Path:
+    """Folder of the built-in FMUs: ``$FMUID_FMU_DIR``, else ``<repo>/fmus``."""
+    configured = os.environ.get("FMUID_FMU_DIR")
+    return Path(configured) if configured else Path(__file__).resolve().parents[3] / "fmus"
+
+
+def model_src_dir() -> Path:
+    """Folder of the C sources: ``$FMUID_MODEL_SRC``, else ``<repo>/model_src``."""
+    configured = os.environ.get("FMUID_MODEL_SRC")
+    return Path(configured) if configured else Path(__file__).resolve().parents[3] / "model_src"
+
+
+def builtin_fmu(name: str) -> Path:
+    """Path of the built-in FMU ``name``, building all built-in FMUs if it is missing.
+
+    Parameters
+    ----------
+    name
+        One of :data:`BUILTIN_MODELS`.
+
+    Raises
+    ------
+    FmuError
+        If ``name`` is not a built-in model or the build fails.
+
+    """
+    if name not in BUILTIN_MODELS:
+        raise FmuError(
+            f"unknown built-in model {name!r}; the built-in models are {', '.join(BUILTIN_MODELS)}"
+        )
+    path = fmu_dir() / f"{name}.fmu"
+    if not path.is_file():
+        logger.info("building the built-in FMUs into %s", path.parent)
+        build_fmus(model_src_dir(), path.parent)
+    return path
