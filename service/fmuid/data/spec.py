@@ -364,7 +364,9 @@ def _unknown_field(loc: Sequence[str | int]) -> str:
 
 def _suggest(name: str, candidates: Collection[str], what: str) -> str:
     """Return `` (did you mean 'x'?)`` or `` (<what>: a, b, ...)`` for a message."""
-    close = difflib.get_close_matches(name, list(candidates), n=3)
+    folded = {candidate.casefold(): candidate for candidate in candidates}
+    matches = difflib.get_close_matches(name.casefold(), list(folded), n=3, cutoff=0.5)
+    close = [folded[match] for match in matches]
     if close:
         return f" (did you mean {' or '.join(repr(c) for c in close)}?)"
     names = sorted(candidates)
