@@ -1,0 +1,129 @@
+"""Build the FastAPI application of the service and run it with uvicorn."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import Any
+
+import uvicorn
+from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException
+
+from fmuid.api.auth import OPEN_PATHS, BearerAuth
+from fmuid.api.routers import health, jobs, reports
+from fmuid.jobs.store import JobStore
+from fmuid.jobs.worker import Supervisor
+from fmuid.settings import Settings
+
+logger = logging.getLogger(__name__)
+
+DESCRIPTION = """Profile-likelihood identifiability of FMU models as a service.
+
+Submit a job (`fit`, `profile` or `diagnose`) with CSV data, a JSON spec and an FMU (uploaded or
+built-in); poll its status; fetch its result JSON and HTML report. Uploaded FMUs are native code
+and run in isolated, time- and memory-limited processes.
+"""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the application: job store, supervisor of job processes, routes.
+
+    Parameters
+    ----------
+    settings
+        The configuration; read from ``FMUID_*`` environment variables when ``None``.
+
+    Returns
+    -------
+    FastAPI
+        The app; its supervisor starts and stops with the app's lifespan.
+
+    """
+    settings = settings or Settings()
+    store = JobStore(settings.database, settings.data_dir)
+    supervisor = Supervisor(settings, store)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        supervisor.start()
+        logger.info("fmuid service: data in %s, %d worker(s)", settings.data_dir, settings.workers)
+        yield
+        supervisor.stop()
+
+    app = FastAPI(
+        title="fmuid",
+        version="0.1.0",
+        description=DESCRIPTION,
+        lifespan=lifespan,
+        max_body_size=settings.max_upload_bytes,
+    )
+    app.state.settings = settings
+    app.state.store = store
+    app.state.supervisor = supervisor
+    for router in (health.router, jobs.router, reports.router):
+        app.include_router(router)
+
+    async def too_large(request: Request, exc: Exception) -> Any:
+        assert isinstance(exc, HTTPException)
+        if exc.status_code == 413:
+            return JSONResponse(
+                {
+                    "detail": f"the request body exceeds the upload limit of"
+                    f" {settings.max_upload_bytes} bytes (FMUID_MAX_UPLOAD_BYTES)"
+                },
+                status_code=413,
+            )
+        return await http_exception_handler(request, exc)
+
+    app.add_exception_handler(HTTPException, too_large)
+    if settings.api_token:
+        app.add_middleware(BearerAuth, token=settings.api_token)
+        _document_bearer_auth(app)
+    return app
+
+
+def _document_bearer_auth(app: FastAPI) -> None:
+    """Declare the bearer scheme in the OpenAPI schema on every route but the open ones."""
+    build = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            schema = build()
+            components = schema.setdefault("components", {})
+            components["securitySchemes"] = {"bearer": {"type": "http", "scheme": "bearer"}}
+            for path, operations in schema["paths"].items():
+                if path not in OPEN_PATHS:
+                    for operation in operations.values():
+                        operation["security"] = [{"bearer": []}]
+            app.openapi_schema = schema
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+
+
+def serve(
+    host: str | None = None, port: int | None = None, settings: Settings | None = None
+) -> None:
+    """Run the service with uvicorn until interrupted (``fmuid serve``).
+
+    Parameters
+    ----------
+    host, port
+        Where to listen; default from ``settings`` (``127.0.0.1:8000``). Binding to anything but
+        loopback exposes FMU execution to the network: set ``FMUID_API_TOKEN`` then.
+    settings
+        The configuration; from ``FMUID_*`` environment variables when ``None``.
+
+    """
+    settings = settings or Settings()
+    host = host or settings.host
+    port = settings.port if port is None else port
+    if settings.api_token is None and host not in ("127.0.0.1", "localhost", "::1"):
+        logger.warning(
+            "listening on %s without FMUID_API_TOKEN: anyone who reaches it can run code", host
+        )
+    uvicorn.run(create_app(settings), host=host, port=port, log_level="info")

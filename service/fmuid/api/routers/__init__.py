@@ -1,0 +1,1 @@
+"""One router per resource: jobs, their reports, and the service's health."""

@@ -1,0 +1,84 @@
+"""Turn the way a job process ended into a message a user can act on.
+
+Job processes run with ``PYTHONFAULTHANDLER=1`` and their stderr in a log file, so a fatal
+signal leaves a Python traceback there; the innermost FMPy frame names the FMI call that was
+running (``doStep`` -> ``fmi2DoStep``).
+"""
+
+from __future__ import annotations
+
+import re
+import signal
+
+_FATAL = re.compile(r"Fatal Python error: (?P<what>[^\n]+)")
+_FRAME = re.compile(r'^\s+File "(?P<file>[^"]+)", line \d+ in (?P<func>\w+)', re.MULTILINE)
+_SIGNAL_NAMES = {
+    signal.SIGSEGV: "segmentation fault",
+    signal.SIGBUS: "bus error",
+    signal.SIGFPE: "floating-point exception",
+    signal.SIGILL: "illegal instruction",
+    signal.SIGABRT: "abort",
+}
+
+
+def fmi_call_in_traceback(log: str) -> str | None:
+    """Return the FMI function running at the last fatal error in a job log, if known.
+
+    Parameters
+    ----------
+    log
+        Text written by the job process (and its children) to stderr.
+
+    Returns
+    -------
+    str or None
+        E.g. ``"fmi2DoStep"``; ``None`` when the log has no fatal-error traceback through FMPy.
+
+    """
+    fatal = list(_FATAL.finditer(log))
+    if not fatal:
+        return None
+    for frame in _FRAME.finditer(log, fatal[-1].end()):
+        if "fmpy" in frame["file"] and frame["func"] not in ("w", "wrapper"):
+            func = frame["func"]
+            return func if func.startswith("fmi2") else "fmi2" + func[0].upper() + func[1:]
+    return None
+
+
+def crash_message(log: str) -> str | None:
+    """Describe a fatal signal recorded in a job log, or return ``None`` when there is none."""
+    fatal = list(_FATAL.finditer(log))
+    if not fatal:
+        return None
+    where = fmi_call_in_traceback(log)
+    place = f"in {where}" if where else "in native code"
+    return f"the FMU crashed ({fatal[-1]['what'].strip().lower()}) {place}"
+
+
+def exit_message(returncode: int, log: str, memory_mb: int) -> str:
+    """Describe why a job process ended without recording a result or an error.
+
+    Parameters
+    ----------
+    returncode
+        ``Popen.returncode``: negative for a signal.
+    log
+        The job's stderr log.
+    memory_mb
+        The memory limit the process ran under [MiB].
+
+    """
+    if returncode < 0:
+        sig = -returncode
+        if sig == signal.SIGKILL:
+            return (
+                "the job process was killed (SIGKILL), most likely by the system's out-of-memory"
+                f" killer; the per-job memory limit is {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
+            )
+        name = _SIGNAL_NAMES.get(sig, f"signal {sig}")
+        where = fmi_call_in_traceback(log)
+        place = f" in {where}" if where else " in native code"
+        return f"the FMU crashed ({name}){place}; the job process ended by signal {sig}"
+    if "MemoryError" in log or "Cannot allocate memory" in log:
+        return f"exceeded the memory limit of {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
+    return f"the job process exited with status {returncode} without a result"

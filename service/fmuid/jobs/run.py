@@ -1,0 +1,207 @@
+"""Run one job in this process: ``python -m fmuid.jobs.run JOB_ID --db ... --data-dir ...``.
+
+The supervisor (:mod:`fmuid.jobs.worker`) starts one such process per job in a new session, so
+that a crash, a hang or runaway memory of the FMU hits only this process (and the pool workers
+the engine starts from it), which the supervisor can kill as a group. This process limits its own
+address space, loads the job's inputs from the store, runs the engine, reports progress at most
+every :data:`PROGRESS_INTERVAL_S` and stores the result (or the reason it failed), then writes
+the HTML report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import json
+import logging
+import os
+import resource
+import shutil
+import signal
+import sys
+import tempfile
+import time
+import traceback
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import ExitStack
+from pathlib import Path
+from typing import Any
+
+from fmuid.errors import FmuidError
+from fmuid.jobs.crash import crash_message
+from fmuid.jobs.store import Job, JobStore
+from fmuid.progress import Progress
+
+logger = logging.getLogger(__name__)
+
+PROGRESS_INTERVAL_S = 0.5
+_PR_SET_PDEATHSIG = 1
+
+
+def limit_process(memory_mb: int) -> None:
+    """Cap this process's address space and core dumps, and die with the supervisor.
+
+    ``RLIMIT_AS`` makes allocations past the limit fail (``MemoryError`` in Python, ``NULL``
+    from ``malloc`` in the FMU) instead of exhausting the machine.
+    """
+    limit = memory_mb * 1024 * 1024
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+
+
+class ProgressWriter:
+    """Progress callback that writes to the store at most every ``interval`` seconds."""
+
+    def __init__(self, store: JobStore, job_id: str, interval: float = PROGRESS_INTERVAL_S):
+        self.store = store
+        self.job_id = job_id
+        self.interval = interval
+        self._last = 0.0
+
+    def __call__(self, event: Progress) -> None:
+        """Record ``event`` unless one was recorded less than ``interval`` ago."""
+        now = time.monotonic()
+        if now - self._last >= self.interval or (event.total and event.done >= event.total):
+            self._last = now
+            self.store.set_progress(self.job_id, event.done, event.total, event.stage)
+
+
+def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[Path]]:
+    """Link the job's FMU and CSV blobs into ``workdir`` under their original file names.
+
+    Experiment names come from the CSV file names, so each file gets its uploaded name back.
+    """
+    fmu = workdir / f"{job.model_name}.fmu"
+    fmu.symlink_to(store.blob_path(job.fmu_sha256))
+    data_dir = workdir / "data"
+    data_dir.mkdir()
+    paths = []
+    for dataset in job.datasets:
+        path = data_dir / dataset.name
+        path.symlink_to(store.blob_path(dataset.sha256))
+        paths.append(path)
+    return fmu, paths
+
+
+def run_engine(
+    kind: str,
+    fmu: Path,
+    experiments: list[Any],
+    spec: Any,
+    progress: ProgressWriter,
+    dask_scheduler: str | None,
+) -> Any:
+    """Call ``fmuid.fit``, ``fmuid.profile`` or ``fmuid.diagnose`` and return its result."""
+    import fmuid
+
+    if kind == "fit":
+        return fmuid.fit(fmu, experiments, spec, progress=progress)
+    if kind == "profile":
+        with ExitStack() as stack:
+            executor = None
+            if dask_scheduler:
+                from distributed import Client
+
+                try:
+                    executor = stack.enter_context(Client(dask_scheduler, timeout="20s"))
+                except OSError as exc:
+                    raise FmuidError(
+                        f"cannot reach the dask scheduler at {dask_scheduler}: {exc}"
+                    ) from exc
+            return fmuid.profile(fmu, experiments, spec, progress=progress, executor=executor)
+    diagnose = getattr(fmuid, "diagnose", None)
+    if diagnose is None:
+        raise FmuidError("jobs of kind 'diagnose' are not available: fmuid.diagnose is missing")
+    return diagnose(fmu, experiments, spec, progress=progress)
+
+
+def write_report(
+    result: Any, directory: Path, fmu: Path, experiments: list[Any], spec: Any
+) -> None:
+    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not)."""
+    error_file = directory.with_name(directory.name + ".error")
+    tmp = directory.with_name(directory.name + ".tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        from fmuid.report import write_report as report
+
+        report(result, tmp, fmu=fmu, experiments=experiments, spec=spec)
+    except Exception as exc:  # a failed report must not fail a finished job
+        logger.exception("report of %s failed", directory.name)
+        shutil.rmtree(tmp, ignore_errors=True)
+        error_file.write_text(f"{type(exc).__name__}: {exc}")
+        return
+    shutil.rmtree(directory, ignore_errors=True)
+    os.replace(tmp, directory)
+    error_file.unlink(missing_ok=True)
+
+
+def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: str | None) -> int:
+    """Run ``job`` and record its outcome; return the process exit status (0 when done)."""
+    from fmuid.data import load_experiment, spec_from_json
+
+    progress = ProgressWriter(store, job.id)
+    with tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp:
+        try:
+            fmu, data = stage_inputs(store, job, Path(tmp))
+            spec = spec_from_json(job.spec, "spec")
+            experiments = [load_experiment(path) for path in data]
+            result = run_engine(job.kind, fmu, experiments, spec, progress, dask)
+            result_json = json.dumps(result.to_dict(), allow_nan=False)
+        except FmuidError as exc:
+            store.fail(job.id, str(exc))
+            return 1
+        except MemoryError:
+            store.fail(job.id, f"exceeded the memory limit of {memory_mb} MB (FMUID_JOB_MEMORY_MB)")
+            return 1
+        except BrokenProcessPool:
+            sys.stderr.flush()
+            log = _read_log()
+            store.fail(
+                job.id,
+                crash_message(log) or "a worker process of the job died unexpectedly",
+            )
+            return 1
+        except Exception as exc:
+            traceback.print_exc()
+            store.fail(job.id, f"internal error: {type(exc).__name__}: {exc}")
+            return 1
+        write_report(result, report_dir / job.id, fmu, experiments, spec)
+        if not store.finish(job.id, result_json):
+            logger.info("job %s was cancelled before it finished", job.id)
+    return 0
+
+
+def _read_log() -> str:
+    """Return what this process's stderr file holds so far ('' when stderr is not a file)."""
+    try:
+        return Path(f"/proc/self/fd/{sys.stderr.fileno()}").read_text(errors="replace")
+    except OSError:
+        return ""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of a job process."""
+    parser = argparse.ArgumentParser(prog="python -m fmuid.jobs.run")
+    parser.add_argument("job_id")
+    parser.add_argument("--db", type=Path, required=True)
+    parser.add_argument("--data-dir", type=Path, required=True)
+    parser.add_argument("--memory-mb", type=int, required=True)
+    parser.add_argument("--dask-scheduler", default=None)
+    args = parser.parse_args(argv)
+    limit_process(args.memory_mb)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
+    store = JobStore(args.db, args.data_dir)
+    job = store.get(args.job_id)
+    if job is None or job.status != "running":
+        logger.warning("job %s is not running; nothing to do", args.job_id)
+        return 0
+    report_dir = args.data_dir / "reports"
+    report_dir.mkdir(parents=True, exist_ok=True)
+    return run_job(store, job, report_dir, args.memory_mb, args.dask_scheduler)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,346 @@
+"""The job store: jobs and results in SQLite, uploaded files on disk by content hash.
+
+One SQLite file (WAL mode) holds the jobs table and the results; every thread and process opens
+its own connection and keeps transactions short, so the API process, its supervisor thread and
+the job processes can share the file. Uploaded FMUs and CSV files live in
+``<data_dir>/blobs/<sha256>``, written through a temporary file and ``os.replace`` so that a
+crash never leaves half a file under a final name.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sqlite3
+import threading
+import time
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+KINDS = ("fit", "profile", "diagnose")
+STATUSES = ("queued", "running", "done", "failed", "cancelled")
+FINAL_STATUSES = ("done", "failed", "cancelled")
+MAX_ATTEMPTS = 3
+"""A job interrupted by this many service restarts is failed instead of queued again."""
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS jobs (
+    id TEXT PRIMARY KEY,
+    kind TEXT NOT NULL,
+    status TEXT NOT NULL,
+    created REAL NOT NULL,
+    started REAL,
+    finished REAL,
+    progress_done INTEGER NOT NULL DEFAULT 0,
+    progress_total INTEGER NOT NULL DEFAULT 0,
+    progress_stage TEXT NOT NULL DEFAULT '',
+    error TEXT,
+    fmu_sha256 TEXT NOT NULL,
+    model_name TEXT NOT NULL,
+    spec TEXT NOT NULL,
+    datasets TEXT NOT NULL,
+    attempts INTEGER NOT NULL DEFAULT 0,
+    pid INTEGER
+);
+CREATE INDEX IF NOT EXISTS jobs_status_created ON jobs (status, created);
+CREATE TABLE IF NOT EXISTS results (
+    job_id TEXT PRIMARY KEY REFERENCES jobs (id),
+    json TEXT NOT NULL
+);
+"""
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """One uploaded CSV file: its original file name (the experiment name) and content hash."""
+
+    name: str
+    sha256: str
+
+
+@dataclass(frozen=True)
+class Job:
+    """One row of the jobs table.
+
+    Attributes
+    ----------
+    id
+        A UUID4 string.
+    kind
+        ``"fit"``, ``"profile"`` or ``"diagnose"``.
+    status
+        ``"queued"``, ``"running"``, ``"done"``, ``"failed"`` or ``"cancelled"``.
+    created, started, finished
+        Unix times [s]; ``started``/``finished`` are ``None`` until they happen.
+    progress_done, progress_total, progress_stage
+        The last progress event the job process reported.
+    error
+        Why the job failed or was cancelled.
+    fmu_sha256, model_name
+        The FMU (a blob) and its model name.
+    spec
+        The study specification as JSON text, exactly as submitted.
+    datasets
+        The CSV files, in submission order.
+    attempts
+        How many times a job process was started for it.
+    pid
+        Process id of its job process while running.
+
+    """
+
+    id: str
+    kind: str
+    status: str
+    created: float
+    started: float | None
+    finished: float | None
+    progress_done: int
+    progress_total: int
+    progress_stage: str
+    error: str | None
+    fmu_sha256: str
+    model_name: str
+    spec: str
+    datasets: tuple[Dataset, ...]
+    attempts: int
+    pid: int | None
+
+    @classmethod
+    def from_row(cls, row: sqlite3.Row) -> Job:
+        """Build a job from a ``SELECT * FROM jobs`` row."""
+        values = dict(row)
+        values["datasets"] = tuple(Dataset(**d) for d in json.loads(values["datasets"]))
+        return cls(**values)
+
+
+class JobStore:
+    """Jobs, results and blobs under one data folder.
+
+    Parameters
+    ----------
+    db_path
+        The SQLite file; created with its tables when missing.
+    data_dir
+        Folder of ``blobs/``; created when missing.
+
+    """
+
+    def __init__(self, db_path: Path, data_dir: Path):
+        self.db_path = Path(db_path)
+        self.blob_dir = Path(data_dir) / "blobs"
+        self.blob_dir.mkdir(parents=True, exist_ok=True)
+        self.tmp_dir().mkdir(exist_ok=True)
+        self.db_path.parent.mkdir(parents=True, exist_ok=True)
+        self._local = threading.local()
+        self._connection().executescript(_SCHEMA)
+
+    # -- connections -------------------------------------------------------------------------
+
+    def _connection(self) -> sqlite3.Connection:
+        conn: sqlite3.Connection | None = getattr(self._local, "conn", None)
+        if conn is None or getattr(self._local, "pid", None) != os.getpid():
+            conn = sqlite3.connect(self.db_path, timeout=30.0, isolation_level=None)
+            conn.row_factory = sqlite3.Row
+            conn.execute("PRAGMA journal_mode=WAL")
+            conn.execute("PRAGMA synchronous=NORMAL")
+            conn.execute("PRAGMA foreign_keys=ON")
+            self._local.conn = conn
+            self._local.pid = os.getpid()
+        return conn
+
+    @contextmanager
+    def _transaction(self) -> Iterator[sqlite3.Connection]:
+        conn = self._connection()
+        conn.execute("BEGIN IMMEDIATE")
+        try:
+            yield conn
+        except BaseException:
+            conn.execute("ROLLBACK")
+            raise
+        conn.execute("COMMIT")
+
+    # -- blobs -------------------------------------------------------------------------------
+
+    def add_file(self, path: Path) -> str:
+        """Move a file into the blob folder under its SHA-256 (hex) and return the hash.
+
+        ``path`` must be on the same file system as the data folder (e.g. in :meth:`tmp_dir`);
+        the rename is atomic, so a crash never leaves a partial blob, and equal uploads share
+        one blob.
+        """
+        digest = hashlib.sha256()
+        with open(path, "rb") as stream:
+            while chunk := stream.read(1 << 20):
+                digest.update(chunk)
+        sha = digest.hexdigest()
+        os.replace(path, self.blob_dir / sha)
+        return sha
+
+    def tmp_dir(self) -> Path:
+        """Return the folder for uploads being checked (beside the blobs, same file system)."""
+        return self.blob_dir.parent / "tmp"
+
+    def blob_path(self, sha256: str) -> Path:
+        """Return the file of a blob (which exists once :meth:`put_blob` returned its hash)."""
+        return self.blob_dir / sha256
+
+    # -- jobs --------------------------------------------------------------------------------
+
+    def create(
+        self,
+        kind: str,
+        spec: str,
+        fmu_sha256: str,
+        model_name: str,
+        datasets: list[Dataset],
+    ) -> Job:
+        """Insert a queued job and return it."""
+        job_id = str(uuid.uuid4())
+        with self._transaction() as conn:
+            conn.execute(
+                "INSERT INTO jobs (id, kind, status, created, fmu_sha256, model_name, spec,"
+                " datasets) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
+                (
+                    job_id,
+                    kind,
+                    time.time(),
+                    fmu_sha256,
+                    model_name,
+                    spec,
+                    json.dumps([{"name": d.name, "sha256": d.sha256} for d in datasets]),
+                ),
+            )
+        job = self.get(job_id)
+        assert job is not None
+        return job
+
+    def get(self, job_id: str) -> Job | None:
+        """Return a job, or ``None`` when there is no job with that id."""
+        row = self._connection().execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
+        return Job.from_row(row) if row else None
+
+    def list_jobs(self, limit: int = 100, offset: int = 0) -> list[Job]:
+        """Return jobs, newest first."""
+        rows = self._connection().execute(
+            "SELECT * FROM jobs ORDER BY created DESC, rowid DESC LIMIT ? OFFSET ?",
+            (limit, offset),
+        )
+        return [Job.from_row(r) for r in rows]
+
+    def counts(self) -> dict[str, int]:
+        """Return the number of jobs per status (every status present, zeros included)."""
+        rows = self._connection().execute("SELECT status, COUNT(*) FROM jobs GROUP BY status")
+        counts = dict.fromkeys(STATUSES, 0)
+        counts.update({status: n for status, n in rows})
+        return counts
+
+    def running(self) -> list[Job]:
+        """Return the jobs marked running."""
+        rows = self._connection().execute("SELECT * FROM jobs WHERE status = 'running'")
+        return [Job.from_row(r) for r in rows]
+
+    def claim_next(self) -> Job | None:
+        """Mark the oldest queued job running (one more attempt) and return it, or ``None``."""
+        with self._transaction() as conn:
+            row = conn.execute(
+                "UPDATE jobs SET status = 'running', started = ?, attempts = attempts + 1,"
+                " error = NULL, progress_done = 0, progress_total = 0, progress_stage = ''"
+                " WHERE id = (SELECT id FROM jobs WHERE status = 'queued'"
+                " ORDER BY created, rowid LIMIT 1) RETURNING *",
+                (time.time(),),
+            ).fetchone()
+        return Job.from_row(row) if row else None
+
+    def set_pid(self, job_id: str, pid: int | None) -> None:
+        """Record the process that runs a job."""
+        with self._transaction() as conn:
+            conn.execute("UPDATE jobs SET pid = ? WHERE id = ?", (pid, job_id))
+
+    def set_progress(self, job_id: str, done: int, total: int, stage: str) -> None:
+        """Record a progress event of a running job."""
+        with self._transaction() as conn:
+            conn.execute(
+                "UPDATE jobs SET progress_done = ?, progress_total = ?, progress_stage = ?"
+                " WHERE id = ? AND status = 'running'",
+                (done, total, stage, job_id),
+            )
+
+    def finish(self, job_id: str, result_json: str) -> bool:
+        """Store the result (JSON text) of a running job and mark it done.
+
+        Returns
+        -------
+        bool
+            ``False`` when the job was no longer running (cancelled meanwhile): nothing stored.
+
+        """
+        with self._transaction() as conn:
+            cur = conn.execute(
+                "UPDATE jobs SET status = 'done', finished = ?, pid = NULL,"
+                " progress_done = MAX(progress_done, progress_total)"
+                " WHERE id = ? AND status = 'running'",
+                (time.time(), job_id),
+            )
+            if cur.rowcount == 0:
+                return False
+            conn.execute(
+                "INSERT OR REPLACE INTO results (job_id, json) VALUES (?, ?)", (job_id, result_json)
+            )
+        return True
+
+    def fail(self, job_id: str, error: str) -> bool:
+        """Mark a queued or running job failed with the reason; ``False`` if it was final."""
+        return self._finalise(job_id, "failed", error)
+
+    def cancel(self, job_id: str) -> bool:
+        """Mark a queued or running job cancelled; ``False`` if it was final already."""
+        return self._finalise(job_id, "cancelled", "cancelled by request")
+
+    def _finalise(self, job_id: str, status: str, error: str) -> bool:
+        with self._transaction() as conn:
+            cur = conn.execute(
+                "UPDATE jobs SET status = ?, error = ?, finished = ?, pid = NULL"
+                " WHERE id = ? AND status IN ('queued', 'running')",
+                (status, error, time.time(), job_id),
+            )
+        return cur.rowcount > 0
+
+    def result(self, job_id: str) -> str | None:
+        """Return the result JSON text of a done job, or ``None``."""
+        row = (
+            self._connection()
+            .execute("SELECT json FROM results WHERE job_id = ?", (job_id,))
+            .fetchone()
+        )
+        return row[0] if row else None
+
+    def recover(self) -> list[Job]:
+        """Put jobs left running by a stopped service back in the queue.
+
+        A job that has already been started :data:`MAX_ATTEMPTS` times is failed with the
+        reason instead, so that an input that kills the service cannot loop forever.
+
+        Returns
+        -------
+        list of Job
+            The jobs as they were found (status ``running``), with the pid of their process.
+
+        """
+        with self._transaction() as conn:
+            rows = conn.execute("SELECT * FROM jobs WHERE status = 'running'").fetchall()
+            conn.execute(
+                "UPDATE jobs SET status = 'failed', finished = ?, pid = NULL, error ="
+                " 'interrupted by a restart of the service ' || attempts || ' times; not retried'"
+                " WHERE status = 'running' AND attempts >= ?",
+                (time.time(), MAX_ATTEMPTS),
+            )
+            conn.execute(
+                "UPDATE jobs SET status = 'queued', pid = NULL, started = NULL"
+                " WHERE status = 'running'"
+            )
+        return [Job.from_row(r) for r in rows]

@@ -1,0 +1,94 @@
+"""Settings of the HTTP service and its job workers, read from ``FMUID_*`` environment variables.
+
+The settings are read when the app is built (:func:`fmuid.api.create_app`), never at import, so
+that tests and the job processes can each build their own.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from pydantic import Field, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+
+def default_data_dir() -> Path:
+    """Return where jobs, uploads and results live unless ``FMUID_DATA_DIR`` says otherwise.
+
+    ``$XDG_DATA_HOME/fmuid`` (usually ``~/.local/share/fmuid``) when a home directory exists,
+    else ``./fmuid-data``.
+    """
+    xdg = os.environ.get("XDG_DATA_HOME")
+    if xdg:
+        return Path(xdg) / "fmuid"
+    try:
+        home = Path.home()
+    except RuntimeError:
+        return Path("fmuid-data").resolve()
+    if not home.is_dir():
+        return Path("fmuid-data").resolve()
+    return home / ".local" / "share" / "fmuid"
+
+
+class Settings(BaseSettings):
+    """Configuration of ``fmuid serve``; every field is the environment variable ``FMUID_<NAME>``.
+
+    Attributes
+    ----------
+    data_dir
+        Folder holding the job database, uploaded files (by content hash), logs and reports.
+    db_path
+        SQLite file of the job store; default ``<data_dir>/jobs.sqlite``.
+    api_token
+        When set, every route but ``/v1/health`` needs ``Authorization: Bearer <token>``.
+    max_upload_bytes
+        Largest accepted request body of ``POST /v1/jobs`` [bytes]; larger ones get 413.
+    max_fmu_unpacked_bytes
+        Largest total unpacked size of an uploaded FMU [bytes] (zip-bomb guard).
+    workers
+        Jobs that run at the same time, each in its own process.
+    job_timeout_s
+        Wall-clock limit of one job [s]; its process group is killed past it.
+    job_memory_mb
+        Address-space limit of one job process [MiB] (``RLIMIT_AS``).
+    dask_scheduler
+        Address of a dask.distributed scheduler (``tcp://host:8786``); profile branches of
+        every job then run on its workers.
+    host, port
+        Where ``fmuid serve`` listens; loopback unless told otherwise.
+
+    """
+
+    model_config = SettingsConfigDict(env_prefix="FMUID_", extra="ignore")
+
+    data_dir: Path = Field(default_factory=default_data_dir)
+    db_path: Path | None = None
+    api_token: str | None = None
+    max_upload_bytes: int = Field(default=50 * 1024 * 1024, gt=0)
+    max_fmu_unpacked_bytes: int = Field(default=200 * 1024 * 1024, gt=0)
+    workers: int = Field(default=1, ge=1)
+    job_timeout_s: float = Field(default=3600.0, gt=0)
+    job_memory_mb: int = Field(default=4096, ge=64)
+    dask_scheduler: str | None = None
+    host: str = "127.0.0.1"
+    port: int = Field(default=8000, ge=0, le=65535)
+
+    @model_validator(mode="after")
+    def _resolve_paths(self) -> Settings:
+        self.data_dir = self.data_dir.expanduser().resolve()
+        if self.db_path is None:
+            self.db_path = self.data_dir / "jobs.sqlite"
+        else:
+            self.db_path = self.db_path.expanduser().resolve()
+        if not self.api_token:
+            self.api_token = None
+        if not self.dask_scheduler:
+            self.dask_scheduler = None
+        return self
+
+    @property
+    def database(self) -> Path:
+        """The SQLite file of the job store (``db_path`` resolved)."""
+        assert self.db_path is not None
+        return self.db_path
