@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import logging
 import posixpath
+import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -68,6 +69,17 @@ def _check_archive(path: Path) -> set[str]:
     return set(names)
 
 
+def _fmi_version(path: Path, names: set[str]) -> str:
+    if "modelDescription.xml" not in names:
+        raise FmuError(f"{path}: the FMU has no modelDescription.xml")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            root = ET.fromstring(archive.read("modelDescription.xml"))
+    except ET.ParseError as exc:
+        raise FmuError(f"{path}: modelDescription.xml is not valid XML: {exc}") from exc
+    return root.get("fmiVersion", "unknown")
+
+
 def _start(value: object) -> float | None:
     if value is None:
         return None
@@ -110,14 +122,13 @@ class FmuModel:
         self.path = Path(path)
         names = _check_archive(self.path)
         self.sha256 = hashlib.sha256(self.path.read_bytes()).hexdigest()
+        version = _fmi_version(self.path, names)
+        if version != "2.0":
+            raise FmuError(f"{self.path}: FMI version {version} is not supported (only 2.0)")
         try:
             description = fmpy.read_model_description(str(self.path))
         except Exception as exc:  # fmpy raises bare Exception, lxml and KeyError subclasses
             raise FmuError(f"{self.path}: cannot read modelDescription.xml: {exc}") from exc
-        if description.fmiVersion != "2.0":
-            raise FmuError(
-                f"{self.path}: FMI version {description.fmiVersion} is not supported (only 2.0)"
-            )
         if description.coSimulation is None:
             raise FmuError(f"{self.path}: the FMU has no co-simulation interface")
         self.model_description: ModelDescription = description

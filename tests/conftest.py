@@ -1,0 +1,32 @@
+"""Session fixtures shared by all tests: the built-in FMUs, compiled once per session."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from fmuid.model.build import build_fmus
+from fmuid.model.builtin import model_src_dir
+
+
+@pytest.fixture(scope="session")
+def built_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Build every model in ``model_src/`` into a temporary folder; model name -> ``.fmu``."""
+    out_dir = tmp_path_factory.mktemp("fmus")
+    return {path.stem: path for path in build_fmus(model_src_dir(), out_dir)}
+
+
+@pytest.fixture(scope="session")
+def tractor_fmu(built_fmus: dict[str, Path]) -> Path:
+    return built_fmus["tractor_implement"]
+
+
+@pytest.fixture(scope="session")
+def msd_fmu(built_fmus: dict[str, Path]) -> Path:
+    return built_fmus["msd"]
+
+
+@pytest.fixture(scope="session")
+def msd_parallel_fmu(built_fmus: dict[str, Path]) -> Path:
+    return built_fmus["msd_parallel"]
