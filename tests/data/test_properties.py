@@ -77,9 +77,10 @@ def corrupted(draw) -> str | bytes:
     if kind == "token":
         cells[row][col] = draw(st.sampled_from(BAD_TOKENS))
     elif kind == "empty_time":
-        cells[row][0] = " "
+        # not the last row: a last row of empty cells is a trailing blank line, which is allowed
+        cells[min(row, len(rows) - 1)][0] = " "
     elif kind == "drop_cell":
-        cells[row].pop()
+        cells[min(row, len(rows) - 1)].pop()
     elif kind == "add_cell":
         cells[row].append(draw(st.sampled_from(["", "1"])))
     elif kind == "repeat_time":
