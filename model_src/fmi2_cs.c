@@ -51,15 +51,26 @@ typedef struct {
     char *name;
 } Instance;
 
+/*
+ * Log an error. The message is formatted here and passed as the logger's format string (with
+ * any '%' doubled), so that loggers which cannot format variadic arguments (e.g. Python ctypes
+ * callbacks) show it as well.
+ */
 static void log_error(Instance *c, const char *fmt, ...) {
-    char message[512];
+    char message[512], escaped[1024];
+    size_t j = 0;
     va_list args;
     va_start(args, fmt);
     vsnprintf(message, sizeof(message), fmt, args);
     va_end(args);
+    for (size_t i = 0; message[i] != '\0' && j + 2 < sizeof(escaped); i++) {
+        if (message[i] == '%') escaped[j++] = '%';
+        escaped[j++] = message[i];
+    }
+    escaped[j] = '\0';
     if (c->functions != NULL && c->functions->logger != NULL) {
         c->functions->logger(c->functions->componentEnvironment, c->name, fmi2Error,
-                             "logStatusError", "%s", message);
+                             "logStatusError", escaped);
     }
 }
 

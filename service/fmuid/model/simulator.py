@@ -59,12 +59,6 @@ class Simulator:
         self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        try:
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(ctypes.byref(self._callbacks))
-        except (ImportError, OSError):
-            logger.debug("fmpy logger proxy unavailable; FMU messages are not formatted")
         self._slave = FMU2Slave(
             guid=self.model.guid,
             unzipDirectory=self._unzip_dir,
