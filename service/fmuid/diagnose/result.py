@@ -1,0 +1,166 @@
+"""The result of a diagnosis (contract: "Diagnose result")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from fmuid.diagnose.residual_tests import TestResult, Window
+from fmuid.fit.result import Cost
+
+
+@dataclass(frozen=True)
+class CandidateScore:
+    """How well one candidate explains the data.
+
+    Attributes
+    ----------
+    effect
+        Catalogue name.
+    parameters
+        Added parameter names and their fitted values.
+    chi2
+        Chi2 of the augmented fit.
+    p_value
+        Likelihood-ratio test against the model it augments: chi2 drop vs chi2(df = added).
+    bic
+        ``chi2 + k ln(n)`` of the augmented model (k free parameters, n data).
+    stage
+        1 for the first round, 2 for the second (on top of the first effect).
+
+    """
+
+    effect: str
+    parameters: dict[str, float]
+    chi2: float
+    p_value: float
+    bic: float
+    stage: int = 1
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form."""
+        return {
+            "effect": self.effect,
+            "parameters": {k: float(v) for k, v in self.parameters.items()},
+            "chi2": float(self.chi2),
+            "p_value": float(self.p_value),
+            "bic": float(self.bic),
+            "stage": self.stage,
+        }
+
+
+@dataclass(frozen=True)
+class AddedEstimate:
+    """Estimate and profile-likelihood interval of an added parameter.
+
+    Attributes
+    ----------
+    estimate
+        Best-fit value.
+    ci
+        Pointwise profile-likelihood interval at ``confidence``; an end is ``None`` when the
+        profile does not cross the threshold inside the bounds.
+    confidence
+        Level of ``ci``.
+    unit, off
+        Unit and the value that switches the effect off.
+    excludes_off
+        Whether ``ci`` rules the off value out.
+
+    """
+
+    estimate: float
+    ci: tuple[float | None, float | None]
+    confidence: float
+    unit: str
+    off: float
+    excludes_off: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form."""
+        return {
+            "estimate": float(self.estimate),
+            "ci": [None if v is None else float(v) for v in self.ci],
+            "confidence": self.confidence,
+            "unit": self.unit,
+            "off": float(self.off),
+            "excludes_off": self.excludes_off,
+        }
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Outcome of ``fmuid.diagnose``: is there a mismatch, where, what explains it.
+
+    ``to_dict`` gives the contract's JSON plus the extra keys documented there.
+    """
+
+    mismatch: bool
+    false_alarm: float
+    evidence: tuple[TestResult, ...]
+    tests_before: tuple[TestResult, ...]
+    tests_after: tuple[TestResult, ...]
+    location: dict[str, Any]
+    windows: tuple[Window, ...]
+    effect: str | None
+    description: str
+    candidates: tuple[CandidateScore, ...]
+    added_parameters: dict[str, AddedEstimate]
+    chi2_before: float
+    chi2_after: float
+    n_data: int
+    lrt_p_value: float | None
+    bic_before: float
+    bic_after: float
+    parameters_before: dict[str, float]
+    parameters_after: dict[str, float]
+    second_effect: str | None = None
+    indistinguishable: tuple[str, ...] = ()
+    generic_correction: dict[str, Any] | None = None
+    fmu: dict[str, str] = field(default_factory=dict)
+    cost: Cost = Cost(0, 0.0)
+
+    def whiteness(self, after: bool) -> dict[str, float]:
+        """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""
+        tests = self.tests_after if after else self.tests_before
+        return {
+            f"{t.experiment}/{t.output}": float(t.p_value)
+            for t in tests
+            if t.test == "residual_whiteness"
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the contract (plus extra keys)."""
+        params = {
+            name: {"before": self.parameters_before.get(name), "after": value}
+            for name, value in self.parameters_after.items()
+        }
+        for name, value in self.parameters_before.items():
+            params.setdefault(name, {"before": value, "after": None})
+        return {
+            "mismatch": self.mismatch,
+            "evidence": [t.to_dict() for t in self.evidence],
+            "location": self.location,
+            "effect": self.effect,
+            "description": self.description,
+            "candidates": [c.to_dict() for c in self.candidates],
+            "added_parameters": {k: v.to_dict() for k, v in self.added_parameters.items()},
+            "chi2_before": float(self.chi2_before),
+            "chi2_after": float(self.chi2_after),
+            "parameters": params,
+            "fmu": dict(self.fmu),
+            "n_data": self.n_data,
+            "false_alarm": self.false_alarm,
+            "second_effect": self.second_effect,
+            "indistinguishable": list(self.indistinguishable),
+            "lrt_p_value": None if self.lrt_p_value is None else float(self.lrt_p_value),
+            "bic_before": float(self.bic_before),
+            "bic_after": float(self.bic_after),
+            "whiteness_before": self.whiteness(after=False),
+            "whiteness_after": self.whiteness(after=True),
+            "windows": [w.to_dict() for w in self.windows],
+            "tests_before": [t.to_dict() for t in self.tests_before],
+            "tests_after": [t.to_dict() for t in self.tests_after],
+            "generic_correction": self.generic_correction,
+            "cost": self.cost.to_dict(),
+        }
