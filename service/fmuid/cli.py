@@ -113,7 +113,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     inputs = [c for c in experiment.columns if c in model.inputs]
     input_time, input_values = merged_inputs(experiment, inputs)
     outputs = list(model.outputs)
-    y = Simulator(model).simulate(params, input_time, input_values, experiment.time, outputs)
+    y = Simulator(fmu).simulate(params, input_time, input_values, experiment.time, outputs)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     table = np.column_stack([experiment.time, y])

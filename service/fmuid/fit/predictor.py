@@ -7,9 +7,9 @@ from pathlib import Path
 from typing import Protocol
 
 import numpy as np
-from fmuid.model.simulator import get_simulator
 
 from fmuid.data import Experiment
+from fmuid.model.simulator import get_simulator
 
 
 class Predictor(Protocol):

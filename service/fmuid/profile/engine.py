@@ -90,18 +90,10 @@ def profile_problem(
         better_found = True
         best = min(better, key=lambda p: p.chi2)
         log.info("profile found chi2 %.6g below the optimum %.6g; refitting", best.chi2, fit.chi2)
-        sims0 = problem.simulations
+        sims0, t_refit = problem.simulations, time.perf_counter()
         z, chi2, message = refine(problem, best.z)
-        fit = make_fit_result(
-            problem,
-            z,
-            chi2,
-            jacobian(problem, z),
-            message,
-            fit.global_search,
-            time.perf_counter(),
-            sims0,
-        )
+        jac = jacobian(problem, z)
+        fit = make_fit_result(problem, z, chi2, jac, message, fit.global_search, t_refit, sims0)
         sims += fit.cost.simulations
     z_hat = fit.z_estimate()
     sd = fit.fisher_sd_z()

@@ -27,6 +27,8 @@ class WalkOptions:
         Walk on until the profile exceeds the simultaneous threshold times ``1 + margin``.
     min_step, max_step
         Step limits, as fractions of the parameter's range in fitted coordinates.
+    max_rise
+        A step whose chi2 rise exceeds this multiple of the target is retried shorter.
     max_points
         Cap on points per branch.
     max_failures
@@ -42,6 +44,7 @@ class WalkOptions:
     margin: float = 0.25
     min_step: float = 1e-4
     max_step: float = 0.08
+    max_rise: float = 3.0
     max_points: int = 60
     max_failures: int = 3
     better_tol: float = 1e-3
@@ -121,6 +124,7 @@ def walk_branch(
     path: list[WalkPoint] = [WalkPoint(z_hat.copy(), chi2_hat)]
     points: list[WalkPoint] = []
     failures = 0
+    retries = 0
     last_ok = path[0]
     while len(points) < options.max_points:
         zi = last_ok.z[index] + direction * step
@@ -151,6 +155,12 @@ def walk_branch(
         if point.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
             return BranchResult(index, direction, points, point, problem.simulations - sims0)
         rise = point.chi2 - last_ok.chi2
+        if rise > options.max_rise * target and step > options.min_step * span and retries < 8:
+            points.pop()
+            retries += 1
+            step = max(step * max(np.sqrt(target / rise), 0.1), options.min_step * span)
+            continue
+        retries = 0
         path.append(point)
         last_ok = point
         if at_edge or point.chi2 - chi2_hat > threshold * (1.0 + options.margin):
