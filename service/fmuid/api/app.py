@@ -8,12 +8,10 @@ from contextlib import asynccontextmanager
 from typing import Any
 
 import uvicorn
-from fastapi import FastAPI, Request
-from fastapi.exception_handlers import http_exception_handler
-from fastapi.responses import JSONResponse
-from starlette.exceptions import HTTPException
+from fastapi import FastAPI
 
 from fmuid.api.auth import OPEN_PATHS, BearerAuth
+from fmuid.api.limits import BodyLimit
 from fmuid.api.routers import health, jobs, reports
 from fmuid.jobs.store import JobStore
 from fmuid.jobs.worker import Supervisor
@@ -59,7 +57,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         version="0.1.0",
         description=DESCRIPTION,
         lifespan=lifespan,
-        max_body_size=settings.max_upload_bytes,
     )
     app.state.settings = settings
     app.state.store = store
@@ -67,20 +64,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     for router in (health.router, jobs.router, reports.router):
         app.include_router(router)
 
-    async def too_large(request: Request, exc: Exception) -> Any:
-        assert isinstance(exc, HTTPException)
-        if exc.status_code == 413:
-            return JSONResponse(
-                {
-                    "detail": f"the request body exceeds the upload limit of"
-                    f" {settings.max_upload_bytes} bytes (FMUID_MAX_UPLOAD_BYTES)"
-                },
-                status_code=413,
-            )
-        return await http_exception_handler(request, exc)
-
-    app.add_exception_handler(HTTPException, too_large)
-    if settings.api_token:
+    app.add_middleware(BodyLimit, limit=settings.max_upload_bytes)
+    if settings.api_token:  # added last, so it runs first: no body is read without the token
         app.add_middleware(BearerAuth, token=settings.api_token)
         _document_bearer_auth(app)
     return app

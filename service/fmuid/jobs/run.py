@@ -15,6 +15,7 @@ import ctypes
 import json
 import logging
 import os
+import re
 import resource
 import shutil
 import signal
@@ -69,12 +70,21 @@ class ProgressWriter:
 
 
 def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[Path]]:
-    """Link the job's FMU and CSV blobs into ``workdir`` under their original file names.
+    """Give the job's FMU and CSV blobs their file names back; return their paths.
 
-    Experiment names come from the CSV file names, so each file gets its uploaded name back.
+    Experiment names come from the CSV file names, so each CSV is linked into ``workdir`` under
+    its uploaded name. The FMU gets a stable path, ``<data_dir>/fmus/<sha256>/<model>.fmu``,
+    because dask workers open it by path: on other machines they see it when the data folder is
+    shared (the compose file mounts the same volume).
     """
-    fmu = workdir / f"{job.model_name}.fmu"
-    fmu.symlink_to(store.blob_path(job.fmu_sha256))
+    fmu_dir = store.blob_dir.parent / "fmus" / job.fmu_sha256
+    fmu_dir.mkdir(parents=True, exist_ok=True)
+    fmu = fmu_dir / (re.sub(r"[^A-Za-z0-9_-]", "_", job.model_name)[:100] + ".fmu")
+    if not fmu.exists():
+        link = fmu_dir / f".{os.getpid()}.tmp"
+        link.unlink(missing_ok=True)
+        link.symlink_to(store.blob_path(job.fmu_sha256))
+        os.replace(link, fmu)
     data_dir = workdir / "data"
     data_dir.mkdir()
     paths = []
