@@ -7,11 +7,15 @@ running (``doStep`` -> ``fmi2DoStep``).
 
 from __future__ import annotations
 
+import linecache
 import re
 import signal
 
 _FATAL = re.compile(r"Fatal Python error: (?P<what>[^\n]+)")
-_FRAME = re.compile(r'^\s+File "(?P<file>[^"]+)", line \d+ in (?P<func>\w+)', re.MULTILINE)
+_FRAME = re.compile(
+    r'^\s+File "(?P<file>[^"]+)", line (?P<line>\d+) in (?P<func>\w+)', re.MULTILINE
+)
+_FMI_NAME = re.compile(r"fmi2[A-Z]\w*")
 _SIGNAL_NAMES = {
     signal.SIGSEGV: "segmentation fault",
     signal.SIGBUS: "bus error",
@@ -24,6 +28,11 @@ _SIGNAL_NAMES = {
 def fmi_call_in_traceback(log: str) -> str | None:
     """Return the FMI function running at the last fatal error in a job log, if known.
 
+    The innermost Python frame is the one that called into the FMU. Its source line (and the
+    next, where a call and its error check share a statement) names the FMI function in fmuid's
+    simulator (``do_step(...)`` checked as ``"fmi2DoStep"``); FMPy's wrappers are named after it
+    (``doStep``).
+
     Parameters
     ----------
     log
@@ -32,13 +41,21 @@ def fmi_call_in_traceback(log: str) -> str | None:
     Returns
     -------
     str or None
-        E.g. ``"fmi2DoStep"``; ``None`` when the log has no fatal-error traceback through FMPy.
+        E.g. ``"fmi2DoStep"``; ``None`` when the log has no fatal-error traceback naming one.
 
     """
     fatal = list(_FATAL.finditer(log))
     if not fatal:
         return None
-    for frame in _FRAME.finditer(log, fatal[-1].end()):
+    frames = list(_FRAME.finditer(log, fatal[-1].end()))
+    if frames:
+        innermost = frames[0]
+        lineno = int(innermost["line"])
+        source = "".join(linecache.getline(innermost["file"], n) for n in (lineno, lineno + 1))
+        named = _FMI_NAME.search(source)
+        if named:
+            return named.group(0)
+    for frame in frames:
         if "fmpy" in frame["file"] and frame["func"] not in ("w", "wrapper"):
             func = frame["func"]
             return func if func.startswith("fmi2") else "fmi2" + func[0].upper() + func[1:]
