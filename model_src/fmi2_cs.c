@@ -2,8 +2,10 @@
  * Shared FMI 2.0 co-simulation layer used by every fmuid model.
  *
  * The model's physics (model.h) is integrated with a fixed-step classical Runge-Kutta method:
- * a communication step h is split into n = ceil(h / 1 ms) equal sub-steps, so runs are
- * deterministic. Inputs are linear inside a step when the master sets first-order input
+ * a communication step h is split into n = ceil(h / 4 ms) equal sub-steps, so runs are
+ * deterministic and the outputs are smooth functions of the parameters. At 4 ms the tractor's
+ * yaw rates stay within 1e-6 rad/s of a tight solve_ivp reference at every corner of the thesis's
+ * Table 3.2 bounds (tests/model), at a quarter of the cost of 1 ms. Inputs are linear inside a step when the master sets first-order input
  * derivatives (fmi2SetRealInputDerivatives): u(t) = u + du/dt * (t - t_set), with t_set the
  * communication point at which the value was set. Every error returns fmi2Error, logs a message
  * under the category "logStatusError" and puts the instance into the error state, from which
@@ -18,7 +20,7 @@
 #include "fmi2Functions.h"
 #include "model.h"
 
-#define MAX_SUBSTEP 1e-3
+#define MAX_SUBSTEP 4e-3
 #define N_INPUTS_ALLOC (N_INPUTS > 0 ? N_INPUTS : 1)
 
 typedef enum {
