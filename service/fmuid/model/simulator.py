@@ -7,6 +7,7 @@ import logging
 import os
 import shutil
 import tempfile
+import threading
 import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -316,15 +317,17 @@ def _segments(
     return value.T.copy(), slope.T.copy()
 
 
-_CACHE: dict[tuple[str, int], Simulator] = {}
+_CACHE: dict[tuple[str, int, int], Simulator] = {}
 _CACHE_PID = os.getpid()
 
 
 def get_simulator(path: str | Path) -> Simulator:
-    """Return this process's :class:`Simulator` for ``path``, creating it on first use.
+    """Return this thread's :class:`Simulator` for ``path``, creating it on first use.
 
-    The cache key is the resolved path and the file's modification time, so a rebuilt FMU gets
-    a fresh simulator (the old one is closed). A forked child starts with an empty cache.
+    FMU instances are not thread-safe, so each thread of a process (e.g. a dask worker with
+    several threads) gets its own. The cache key is the resolved path, the file's modification
+    time and the thread, so a rebuilt FMU gets a fresh simulator (the old one is closed). A
+    forked child starts with an empty cache.
 
     Parameters
     ----------
@@ -341,10 +344,11 @@ def get_simulator(path: str | Path) -> Simulator:
         mtime = resolved.stat().st_mtime_ns
     except OSError as exc:
         raise FmuError(f"FMU {path} does not exist") from exc
-    key = (str(resolved), mtime)
+    thread = threading.get_ident()
+    key = (str(resolved), mtime, thread)
     simulator = _CACHE.get(key)
     if simulator is None:
-        for old_key in [k for k in _CACHE if k[0] == key[0]]:
+        for old_key in [k for k in _CACHE if k[0] == key[0] and k[2] == thread]:
             _CACHE.pop(old_key).close()
         simulator = Simulator(resolved)
         _CACHE[key] = simulator
