@@ -1,0 +1,21 @@
+"""Ruff (with the D and T20 rules) and mypy over the package, as STYLE.md asks of CI."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", *args], cwd=ROOT, capture_output=True, text=True)
+
+
+def test_ruff_clean():
+    proc = run("ruff", "check", ".")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_mypy_clean():
+    proc = run("mypy")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
