@@ -57,14 +57,14 @@ EFFECTS = (
 )  # fmt: skip
 
 MAGNITUDES = {
-    "sensor_lag": (0.12, 0.25),  # tau [s]
-    "input_delay": (0.12, 0.25),  # delay [s]
-    "steering_lag": (0.12, 0.25),  # tau [s]
-    "steer_offset": (0.006, 0.012),  # [rad]
+    "sensor_lag": (0.1, 0.2),  # tau [s]
+    "input_delay": (0.1, 0.2),  # delay [s]
+    "steering_lag": (0.1, 0.2),  # tau [s]
+    "steer_offset": (0.0015, 0.003),  # [rad]
     "gyro_bias": (0.6, 1.2),  # bias in units of the channel's noise sigma
-    "tire_saturation": (0.06, 0.03),  # alpha_sat [rad]; smaller saturates more
-    "side_slope": (0.04, 0.08),  # [rad]
-    "hitch_stiffness": (40000.0, 80000.0),  # [N m/rad]; damping 0.3 s times it
+    "tire_saturation": (0.07, 0.045),  # alpha_sat [rad]; smaller saturates more
+    "side_slope": (0.06, 0.12),  # [rad]
+    "hitch_stiffness": (10000.0, 20000.0),  # [N m/rad]; damping 0.3 s times it
 }
 """Two magnitudes per effect: "small" (concealed) and "large"."""
 

@@ -38,6 +38,7 @@ from fmuid.fit.predictor import FmuPredictor, merged_inputs
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import Cost, FitResult
 from fmuid.profile.engine import profile_problem
+from fmuid.profile.walk import WalkOptions
 from fmuid.progress import Progress, ProgressCallback
 
 log = logging.getLogger(__name__)
@@ -65,6 +66,9 @@ class DiagnoseOptions:
         Grid points of the warm-start scan over each added parameter's range.
     workers
         Processes for the profile branches (1: in this process).
+    walk
+        Profile walk settings: the walk stops at the simultaneous threshold, past the
+        pointwise crossing that gives the added parameters' intervals.
 
     """
 
@@ -75,6 +79,12 @@ class DiagnoseOptions:
     max_nfev: int = 15
     scan_points: int = 7
     workers: int = 1
+    walk: WalkOptions = WalkOptions(  # noqa: B008 (frozen value)
+        rise_per_step=0.15,
+        margin=0.0,
+        max_points=12,
+        refit=FitOptions(ftol=1e-7, xtol=1e-7, gtol=1e-7, max_nfev=20),
+    )
 
 
 def residual_series(problem: Problem, values: dict[str, float]) -> list[rt.Series]:
@@ -169,7 +179,7 @@ def _experiments_disagree(
             parameters=problem.parameter_specs, sigma=[problem.sigma[i]],
             sigma_method=problem.sigma_method,
         )  # fmt: skip
-        _, chi2, _ = refine(one, z0, options=FitOptions(max_nfev=opts.max_nfev))
+        _, chi2, _ = refine(one, z0, options=FitOptions(ftol=1e-8, max_nfev=opts.max_nfev))
         separate += chi2
     stat = max(fit.chi2 - separate, 0.0)
     df = (len(problem.experiments) - 1) * problem.n_free
@@ -346,7 +356,9 @@ def diagnose_problem(
             cost=Cost(problem.simulations - sims0, time.perf_counter() - t0), **common,
         )  # fmt: skip
     added = [p for c in applied for p in c.parameters]
-    prof = profile_problem(aug, final_fit, only=[p.name for p in added], workers=opts.workers)
+    prof = profile_problem(
+        aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk
+    )
     final_fit = prof.fit
     estimates = {
         p.name: _added_estimate(

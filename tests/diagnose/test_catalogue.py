@@ -1,0 +1,35 @@
+"""The generic candidates reproduce the independent field truth's effects (scipy model)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fieldtruth as ft
+from fmuid.diagnose.catalogue import AugmentedPredictor
+from fmuid.fit.predictor import FmuPredictor
+
+WRAPPERS = {
+    "sensor_lag": ("tau_sensor", ("sensor_lag", None)),
+    "steering_lag": ("tau_steer", ("steering_lag", "delta")),
+    "input_delay": ("delay_delta", ("input_delay", "delta")),
+    "steer_offset": ("offset_steer", ("steer_offset", "delta")),
+}
+
+
+@pytest.mark.parametrize("effect", list(WRAPPERS))
+def test_wrapper_matches_field_truth(tractor_fmu: Path, effect: str) -> None:
+    magnitude = ft.MAGNITUDES[effect][1]
+    case = ft.make_case(effect, magnitude, seed=3, rate=10.0, snr=50.0)
+    exp = case.experiments[1]
+    t_in, u_in = exp.input_samples("delta")
+    truth = ft.simulate_truth(case.truth, t_in, u_in, exp.time, effect, magnitude)
+    name, wrapper = WRAPPERS[effect]
+    predictor = AugmentedPredictor(FmuPredictor(tractor_fmu, {}, ["delta"]), {name: wrapper})
+    tires = {k: case.truth[k] for k in ft.BOUNDS}
+    y = predictor.predict({**tires, name: magnitude}, exp, ["gam_t", "gam_i"])
+    sigma = float(np.nanmax(exp.columns["sigma_gam_t"]))
+    assert np.max(np.abs(y[:, 0] - truth["gam_t"])) < 0.05 * sigma
+    assert np.max(np.abs(y[:, 1] - truth["gam_i"])) < 0.05 * sigma
