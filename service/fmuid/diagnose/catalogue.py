@@ -316,9 +316,9 @@ class AugmentedPredictor:
     ) -> np.ndarray:
         """Simulate the FMU with the wrappers applied and return ``outputs`` at every row."""
         fmu_params = {k: v for k, v in params.items() if k not in self.wrappers}
-        by_kind: dict[str, list[tuple[str | None, float]]] = {}
+        by_kind: dict[str, list[tuple[str, float]]] = {}
         for name, (kind, target) in self.wrappers.items():
-            by_kind.setdefault(kind, []).append((target, float(params[name])))
+            by_kind.setdefault(kind, []).append((target or "", float(params[name])))
         input_time, inputs = self.base.inputs_of(experiment)
         grid, rows = self._fine(experiment)
         times = {name: input_time for name in inputs}
@@ -346,8 +346,8 @@ class AugmentedPredictor:
         )
         if lag:
             y = first_order_lag(grid, np.asarray(y, dtype=float), lag[0][1])[rows]
+        y = np.array(y, dtype=float)
         for target, bias in by_kind.get("gyro_bias", []):
             if target in outputs:
-                y = np.array(y, dtype=float)
                 y[:, list(outputs).index(target)] += bias
         return y

@@ -413,7 +413,8 @@ def _unexplained_text(
     location: dict[str, object],
 ) -> str:
     """Human summary of a mismatch that no candidate removes."""
-    where = ", ".join(str(o) for o in location["outputs"])  # type: ignore[union-attr]
+    outputs = location.get("outputs")
+    where = ", ".join(map(str, outputs)) if isinstance(outputs, list) else "the outputs"
     return (
         f"A mismatch is certain in {where} but no catalogue entry removes it: the best "
         f"candidate, {best.effect} (likelihood-ratio p = {best.p_value:.2g}), still leaves "
