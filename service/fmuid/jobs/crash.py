@@ -16,7 +16,7 @@ _FRAME = re.compile(
     r'^\s+File "(?P<file>[^"]+)", line (?P<line>\d+) in (?P<func>\w+)', re.MULTILINE
 )
 _FMI_NAME = re.compile(r"fmi2[A-Z]\w*")
-_SIGNAL_NAMES = {
+_SIGNAL_NAMES: dict[int, str] = {
     signal.SIGSEGV: "segmentation fault",
     signal.SIGBUS: "bus error",
     signal.SIGFPE: "floating-point exception",
