@@ -319,6 +319,16 @@ def _segments(
 
 _CACHE: dict[tuple[str, int, int], Simulator] = {}
 _CACHE_PID = os.getpid()
+_ALIASES: dict[str, Path] = {}
+
+
+def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
+    """Make :func:`get_simulator` open ``local_copy`` whenever it is asked for ``path``.
+
+    Used on remote workers (dask) that do not see the submitting machine's files: the FMU's
+    bytes travel with the work and are written to a local file once.
+    """
+    _ALIASES[str(path)] = local_copy
 
 
 def get_simulator(path: str | Path) -> Simulator:
@@ -339,7 +349,7 @@ def get_simulator(path: str | Path) -> Simulator:
     if _CACHE_PID != os.getpid():
         _CACHE.clear()
         _CACHE_PID = os.getpid()
-    resolved = Path(path).resolve()
+    resolved = _ALIASES.get(str(path), Path(path)).resolve()
     try:
         mtime = resolved.stat().st_mtime_ns
     except OSError as exc:

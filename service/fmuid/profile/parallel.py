@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import multiprocessing
 import os
 import queue
+import tempfile
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from fmuid.fit.problem import Problem
+from fmuid.model.simulator import register_fmu_copy
 from fmuid.profile.walk import BranchResult, WalkOptions, walk_branch
 
 _PROGRESS_QUEUE: Any = None
@@ -137,7 +142,12 @@ def _run_dask(
 ) -> list[BranchResult]:
     from distributed import as_completed
 
-    futures = [client.submit(run_branch, t, pure=False) for t in tasks]
+    problem = tasks[0].problem
+    [fmu_blob] = client.scatter([Path(problem.fmu_path).read_bytes()], broadcast=True, hash=True)
+    futures = [
+        client.submit(run_branch_anywhere, t, problem.model.sha256, fmu_blob, pure=False)
+        for t in tasks
+    ]
     index = {f.key: k for k, f in enumerate(futures)}
     results: list[BranchResult | None] = [None] * len(tasks)
     for future in as_completed(futures):
@@ -147,3 +157,30 @@ def _run_dask(
         if on_point:
             on_point(tasks[k].index, tasks[k].direction, len(result.points))
     return [r for r in results if r is not None]
+
+
+def run_branch_anywhere(task: BranchTask, sha256: str, fmu_bytes: bytes) -> BranchResult:
+    """Walk a branch on a worker that may not see the FMU file: use a local copy if needed."""
+    path = Path(task.problem.fmu_path)
+    if _file_sha256(path) != sha256:
+        local = Path(tempfile.gettempdir()) / "fmuid-fmus" / sha256 / path.name
+        if _file_sha256(local) != sha256:
+            local.parent.mkdir(parents=True, exist_ok=True)
+            tmp = local.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_bytes(fmu_bytes)
+            tmp.replace(local)
+        register_fmu_copy(path, local)
+    return run_branch(task)
+
+
+@functools.lru_cache(maxsize=64)
+def _sha256_cached(path: str, mtime_ns: int, size: int) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _file_sha256(path: Path) -> str | None:
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return _sha256_cached(str(path), st.st_mtime_ns, st.st_size)
