@@ -26,6 +26,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter
 
 from fmuid.data import Experiment, ParameterSpec, Spec
@@ -38,8 +39,12 @@ TRACTOR = "tractor_implement"
 STEER_INPUT = "delta"
 """The tractor's steer input; its offset and lag parameters carry the contract's names."""
 
-FINE_STEP = 0.02
-"""Grid step [s] on which lags are computed (at most half the data's sample interval)."""
+INPUT_STEP = 0.02
+"""Grid step [s] of a lagged input handed to the FMU (at most half the data's interval)."""
+
+FILTER_STEP = 0.005
+"""Grid step [s] on which a sensor lag filters the outputs, interpolated there by a cubic
+spline through the FMU's own step times (no extra FMU steps)."""
 
 
 @dataclass(frozen=True)
@@ -288,18 +293,21 @@ class AugmentedPredictor:
 
     base: FmuPredictor
     wrappers: dict[str, tuple[str, str | None]]
-    _grids: dict[int, tuple[Experiment, np.ndarray, np.ndarray]] = field(default_factory=dict)
+    _grids: dict[tuple[int, float], tuple[Experiment, np.ndarray, np.ndarray]] = field(
+        default_factory=dict
+    )
 
     def __getstate__(self) -> dict[str, object]:
         """Pickle without the per-process grid cache."""
         return {"base": self.base, "wrappers": self.wrappers, "_grids": {}}
 
-    def _fine(self, experiment: Experiment) -> tuple[np.ndarray, np.ndarray]:
-        """Fine time grid holding every data row, and the rows' indices in it."""
-        cached = self._grids.get(id(experiment))
+    def _fine(self, experiment: Experiment, step: float) -> tuple[np.ndarray, np.ndarray]:
+        """Time grid of about ``step`` holding every data row, and the rows' indices in it."""
+        key = (id(experiment), step)
+        cached = self._grids.get(key)
         if cached is None or cached[0] is not experiment:
             t = experiment.time
-            step = min(FINE_STEP, float(np.min(np.diff(t))) / 2)
+            step = min(step, float(np.min(np.diff(t))) / 2)
             fine = np.arange(t[0], t[-1], step)
             index = np.searchsorted(t, fine)
             near = np.minimum(
@@ -308,7 +316,7 @@ class AugmentedPredictor:
             )
             grid = np.union1d(t, fine[near > 1e-3 * step])
             cached = (experiment, grid, np.searchsorted(grid, t))
-            self._grids[id(experiment)] = cached
+            self._grids[key] = cached
         return cached[1], cached[2]
 
     def predict(
@@ -320,13 +328,12 @@ class AugmentedPredictor:
         for name, (kind, target) in self.wrappers.items():
             by_kind.setdefault(kind, []).append((target or "", float(params[name])))
         input_time, inputs = self.base.inputs_of(experiment)
-        grid, rows = self._fine(experiment)
         times = {name: input_time for name in inputs}
         values = {name: np.asarray(v, dtype=float) for name, v in inputs.items()}
         for target, offset in by_kind.get("steer_offset", []):
             values[target] = values[target] + offset
         for target, tau in by_kind.get("steering_lag", []):
-            fine = np.union1d(times[target], grid)
+            fine = np.union1d(times[target], self._fine(experiment, INPUT_STEP)[0])
             dense = np.interp(fine, times[target], values[target])
             values[target] = first_order_lag(fine, dense, tau)
             times[target] = fine
@@ -340,13 +347,18 @@ class AugmentedPredictor:
         else:
             common = next(iter(times.values()), input_time)
         lag = by_kind.get("sensor_lag", [])
-        out_time = grid if lag else experiment.time
+        # the FMU steps over the input and output times anyway: read the outputs at all of
+        # them, interpolate by a cubic spline onto the fine grid and filter there
+        out_time = np.union1d(experiment.time, common[common <= experiment.time[-1]])
+        out_time = out_time if lag else experiment.time
         y = get_simulator(self.base.fmu_path).simulate(
             {**self.base.fixed, **fmu_params}, common, values, out_time, list(outputs)
         )
-        if lag:
-            y = first_order_lag(grid, np.asarray(y, dtype=float), lag[0][1])[rows]
         y = np.array(y, dtype=float)
+        if lag:
+            grid, rows = self._fine(experiment, FILTER_STEP)
+            dense = CubicSpline(out_time, y, axis=0)(grid)
+            y = first_order_lag(grid, dense, lag[0][1])[rows]
         for target, bias in by_kind.get("gyro_bias", []):
             if target in outputs:
                 y[:, list(outputs).index(target)] += bias
