@@ -5,13 +5,14 @@ from __future__ import annotations
 import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from typing import Any
 
 import uvicorn
 from fastapi import FastAPI
+from fastapi.exceptions import RequestValidationError
 
-from fmuid.api.auth import OPEN_PATHS, BearerAuth
+from fmuid.api.auth import BearerAuth
 from fmuid.api.limits import BodyLimit
+from fmuid.api.openapi import document_errors, validation_error
 from fmuid.api.routers import health, jobs, reports
 from fmuid.jobs.store import JobStore
 from fmuid.jobs.worker import Supervisor
@@ -64,30 +65,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     for router in (health.router, jobs.router, reports.router):
         app.include_router(router)
 
+    app.add_exception_handler(RequestValidationError, validation_error)
+    document_errors(app, secured=settings.api_token is not None)
+
     app.add_middleware(BodyLimit, limit=settings.max_upload_bytes)
     if settings.api_token:  # added last, so it runs first: no body is read without the token
         app.add_middleware(BearerAuth, token=settings.api_token)
-        _document_bearer_auth(app)
     return app
-
-
-def _document_bearer_auth(app: FastAPI) -> None:
-    """Declare the bearer scheme in the OpenAPI schema on every route but the open ones."""
-    build = app.openapi
-
-    def openapi() -> dict[str, Any]:
-        if app.openapi_schema is None:
-            schema = build()
-            components = schema.setdefault("components", {})
-            components["securitySchemes"] = {"bearer": {"type": "http", "scheme": "bearer"}}
-            for path, operations in schema["paths"].items():
-                if path not in OPEN_PATHS:
-                    for operation in operations.values():
-                        operation["security"] = [{"bearer": []}]
-            app.openapi_schema = schema
-        return app.openapi_schema
-
-    app.openapi = openapi  # type: ignore[method-assign]
 
 
 def serve(

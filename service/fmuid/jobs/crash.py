@@ -16,6 +16,8 @@ _FRAME = re.compile(
     r'^\s+File "(?P<file>[^"]+)", line (?P<line>\d+) in (?P<func>\w+)', re.MULTILINE
 )
 _FMI_NAME = re.compile(r"fmi2[A-Z]\w*")
+# what allocators print when an allocation fails (xmalloc-style C, C++'s std::bad_alloc, Python)
+_OUT_OF_MEMORY = re.compile(r"out of memory|bad_alloc|MemoryError|Cannot allocate memory", re.I)
 _SIGNAL_NAMES: dict[int, str] = {
     signal.SIGSEGV: "segmentation fault",
     signal.SIGBUS: "bus error",
@@ -62,14 +64,25 @@ def fmi_call_in_traceback(log: str) -> str | None:
     return None
 
 
-def crash_message(log: str) -> str | None:
-    """Describe a fatal signal recorded in a job log, or return ``None`` when there is none."""
+def memory_message(memory_mb: int) -> str:
+    """Return the reason given to a job that ran out of its address space."""
+    return f"exceeded the memory limit of {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
+
+
+def crash_message(log: str, memory_mb: int) -> str | None:
+    """Describe a fatal signal recorded in a job log, or return ``None`` when there is none.
+
+    A crash that follows an allocator's out-of-memory message is the memory limit at work.
+    """
     fatal = list(_FATAL.finditer(log))
     if not fatal:
         return None
     where = fmi_call_in_traceback(log)
     place = f"in {where}" if where else "in native code"
-    return f"the FMU crashed ({fatal[-1]['what'].strip().lower()}) {place}"
+    what = fatal[-1]["what"].strip().lower()
+    if _OUT_OF_MEMORY.search(log):
+        return f"{memory_message(memory_mb)}: the FMU gave up ({what}) {place}"
+    return f"the FMU crashed ({what}) {place}"
 
 
 def exit_message(returncode: int, log: str, memory_mb: int) -> str:
@@ -95,7 +108,9 @@ def exit_message(returncode: int, log: str, memory_mb: int) -> str:
         name = _SIGNAL_NAMES.get(sig, f"signal {sig}")
         where = fmi_call_in_traceback(log)
         place = f" in {where}" if where else " in native code"
+        if _OUT_OF_MEMORY.search(log):
+            return f"{memory_message(memory_mb)}: the FMU gave up ({name}){place}"
         return f"the FMU crashed ({name}){place}; the job process ended by signal {sig}"
-    if "MemoryError" in log or "Cannot allocate memory" in log:
-        return f"exceeded the memory limit of {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
+    if _OUT_OF_MEMORY.search(log):
+        return memory_message(memory_mb)
     return f"the job process exited with status {returncode} without a result"

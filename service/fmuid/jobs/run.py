@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from fmuid.errors import FmuidError
-from fmuid.jobs.crash import crash_message
+from fmuid.jobs.crash import crash_message, memory_message
 from fmuid.jobs.store import Job, JobStore
 from fmuid.progress import Progress
 
@@ -164,14 +164,14 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
             store.fail(job.id, str(exc))
             return 1
         except MemoryError:
-            store.fail(job.id, f"exceeded the memory limit of {memory_mb} MB (FMUID_JOB_MEMORY_MB)")
+            store.fail(job.id, memory_message(memory_mb))
             return 1
         except BrokenProcessPool:
             sys.stderr.flush()
             log = _read_log()
             store.fail(
                 job.id,
-                crash_message(log) or "a worker process of the job died unexpectedly",
+                crash_message(log, memory_mb) or "a worker process of the job died unexpectedly",
             )
             return 1
         except Exception as exc:

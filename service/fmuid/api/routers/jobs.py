@@ -15,6 +15,8 @@ from fmuid.settings import Settings
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 
+SQLITE_MAX_INT = 2**63 - 1  # larger integers overflow SQLite's OFFSET (found by schemathesis)
+
 _ERRORS: dict[int | str, dict[str, Any]] = {
     401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
     404: {"model": ErrorOut, "description": "No job with this id."},
@@ -65,7 +67,7 @@ def create_job(
 def list_jobs(
     store: Annotated[JobStore, Depends(get_store)],
     limit: Annotated[int, Query(ge=1, le=1000)] = 100,
-    offset: Annotated[int, Query(ge=0)] = 0,
+    offset: Annotated[int, Query(ge=0, le=SQLITE_MAX_INT)] = 0,
 ) -> JobList:
     """List jobs, newest first."""
     return JobList(jobs=[JobOut.from_job(j) for j in store.list_jobs(limit, offset)])

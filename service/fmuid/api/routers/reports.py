@@ -62,7 +62,14 @@ def get_report(
     return HTMLResponse(html)
 
 
-@router.get("/{job_id}/report/{file_name}", response_class=FileResponse, responses=_RESPONSES)
+@router.get(
+    "/{job_id}/report/{file_name}",
+    response_class=FileResponse,
+    responses={
+        **_RESPONSES,
+        200: {"content": {"image/png": {}}, "description": "A figure of the report."},
+    },
+)
 def get_report_file(
     file_name: str,
     job: Annotated[Job, Depends(get_job)],
