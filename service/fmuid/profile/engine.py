@@ -141,10 +141,17 @@ def _walk_all(
     def on_point(index: int, direction: int, n: int) -> None:
         done[(index, direction)] = n
         if progress:
-            total = sum(max(done.get((t.index, t.direction), 0), expected) for t in tasks)
-            name = problem.names[index]
-            sign = "+" if direction > 0 else "-"
-            progress(Progress("profile", sum(done.values()), total, f"{name} {sign}: {n} points"))
+            per_branch = {
+                (t.index, t.direction): max(done.get((t.index, t.direction), 0), expected)
+                for t in tasks
+            }
+            total = sum(per_branch.values())
+            parts = []
+            for name in names:
+                i = problem.names.index(name)
+                got = done.get((i, -1), 0) + done.get((i, 1), 0)
+                parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
+            progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
 
     results = run_branches(tasks, workers=workers, executor=executor, on_point=on_point)
     return results, sum(r.simulations for r in results)

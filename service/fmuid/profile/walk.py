@@ -49,7 +49,9 @@ class WalkOptions:
     max_failures: int = 3
     better_tol: float = 1e-3
     refit: FitOptions = field(
-        default_factory=lambda: FitOptions(ftol=1e-8, xtol=1e-8, gtol=1e-8, diff_step=1e-6)
+        default_factory=lambda: FitOptions(
+            ftol=1e-6, xtol=1e-6, gtol=1e-6, diff_step=1e-6, max_nfev=150
+        )
     )
 
 

@@ -1,0 +1,107 @@
+"""Profile-likelihood speed on the tractor model (thesis 3.2.3.1: ramp steer, 5 Hz, 10 s).
+
+Prints, for SNR 1000 and 25: wall time, FMU simulations, simulations per profile point against a
+plain trust-region re-fit from scratch (the cost a profile point would have without warm starts),
+and the simultaneous CIs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+import fmuid
+from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.fit.optimize import fit_problem
+from fmuid.model.builtin import builtin_fmu
+from fmuid.model.simulator import Simulator
+from fmuid.stages import make_problem
+
+TIRES = {
+    "C_atf": (220000.0, 10000.0, 700000.0),
+    "C_atr": (486000.0, 10000.0, 700000.0),
+    "C_air": (167000.0, 10000.0, 700000.0),
+    "sig_tf": (0.5, 0.1, 2.0),
+    "sig_tr": (1.0, 0.1, 2.0),
+    "sig_ir": (0.5, 0.1, 2.0),
+}
+
+
+def dataset(fmu, snr: float, seed: int):
+    t = np.round(np.arange(51) * 0.2, 10)
+    ct, cu = np.array([0.0, 1.0, 1.5, 10.0]), np.array([0.0, 0.0, 0.17452, 0.17452])
+    y = Simulator(fmu).simulate({}, ct, {"delta": cu}, t, ["gam_t", "gam_i"])
+    sigma = float(np.max(np.abs(y[:, 0])) / snr)
+    y = y + np.random.default_rng(seed).normal(0.0, sigma, y.shape)
+    rows = np.union1d(t, ct)
+    cols = {"delta": np.interp(rows, ct, cu)}
+    for j, name in enumerate(("gam_t", "gam_i")):
+        col = np.full(rows.size, np.nan)
+        col[np.isin(rows, t)] = y[:, j]
+        cols[name] = col
+    spec = spec_from_json(
+        json.dumps(
+            {
+                "parameters": {
+                    n: {"start": v, "lower": lo, "upper": hi} for n, (v, lo, hi) in TIRES.items()
+                },
+                "inputs": ["delta"],
+                "outputs": {"gam_t": {"sigma": sigma}, "gam_i": {"sigma": sigma}},
+                "global_search": False,
+            }
+        )
+    )
+    return experiment_from_arrays("ramp.csv", rows, cols), spec
+
+
+def refit_cost(fmu, data, spec, result) -> float:
+    """Simulations of plain re-fits from the spec's start with one parameter fixed at a CI end."""
+    costs = []
+    for name, p in list(result.parameters.items())[:3]:
+        end = next((e for e in p.ci_simultaneous if e is not None), None)
+        if end is None:
+            continue
+        others = {k: v for k, v in spec.parameters.items() if k != name}
+        fixed_spec = spec.model_copy(update={"parameters": others, "fixed": {name: end}})
+        problem = make_problem(fmu, [data], fixed_spec)
+        fit = fit_problem(problem, global_search=False)
+        costs.append(fit.cost.simulations)
+    return float(np.mean(costs)) if costs else float("nan")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--workers", type=int, default=os.cpu_count())
+    parser.add_argument("--snr", type=float, nargs="*", default=[1000.0, 25.0])
+    args = parser.parse_args()
+    fmu = builtin_fmu("tractor_implement")
+    print(f"tractor_implement, ramp 5 Hz 10 s, 6 tire parameters, {args.workers} workers")
+    print(f"{'SNR':>6} {'wall s':>8} {'sims':>7} {'points':>7} {'sims/pt':>8} {'refit sims':>11}")
+    rows = []
+    for snr in args.snr:
+        data, spec = dataset(fmu, snr, seed=1)
+        t0 = time.perf_counter()
+        result = fmuid.profile(fmu, [data], spec, workers=args.workers)
+        wall = time.perf_counter() - t0
+        points = sum(len(p.points) - 1 for p in result.parameters.values())
+        profile_sims = result.cost.simulations - result.fit.cost.simulations
+        scratch = refit_cost(fmu, data, spec, result)
+        print(
+            f"{snr:6g} {wall:8.2f} {result.cost.simulations:7d} {points:7d} "
+            f"{profile_sims / points:8.1f} {scratch:11.1f}"
+        )
+        rows.append((snr, result))
+    for snr, result in rows:
+        print(f"\nSNR {snr:g}: simultaneous 68% CIs")
+        for name, p in result.parameters.items():
+            lo, hi = p.ci_simultaneous
+            fmt = lambda v: "null" if v is None else f"{v:.5g}"  # noqa: E731
+            print(f"  {name:7s} {p.estimate:12.5g}  [{fmt(lo)}, {fmt(hi)}]  {p.status}")
+
+
+if __name__ == "__main__":
+    main()
