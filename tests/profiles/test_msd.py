@@ -131,3 +131,21 @@ def test_same_seed_same_result(msd_fmu):
     a.pop("cost")
     b.pop("cost")
     assert a == b
+
+
+def test_better_optimum_found_on_a_profile_refits_and_redoes(msd_fmu):
+    from fmuid.fit.optimize import FitOptions, fit_problem
+    from fmuid.profile.engine import profile_problem
+    from fmuid.stages import make_problem
+
+    truth = {"m": 1.1, "k": 4.4, "b": 1.6}
+    data = msd_step_data(**truth, sigma=0.2, seed=11)
+    problem = make_problem(msd_fmu, [data], spec({"m": 1.5, "k": 3.0, "b": 1.0}, 0.2))
+    rough = fit_problem(problem, global_search=False, options=FitOptions(max_nfev=4))
+    good = fit_problem(problem, global_search=False)
+    assert rough.chi2 > good.chi2 + 1.0
+    result = profile_problem(problem, rough, workers=1)
+    assert result.better_optimum_found
+    assert result.chi2 == pytest.approx(good.chi2, rel=1e-5)
+    for p in result.parameters.values():
+        assert min(q.chi2 for q in p.points if q.error is None) >= result.chi2 - 1e-3
