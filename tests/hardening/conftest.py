@@ -18,7 +18,7 @@ sys.path.insert(0, str(HERE.parent / "api"))
 from api_helpers import Service, msd_csv  # noqa: E402
 
 from fmuid.model.build import build_fmu  # noqa: E402
-from fmuid.model.builtin import model_src_dir  # noqa: E402
+from fmuid.model.builtin import builtin_fmu, model_src_dir  # noqa: E402
 
 
 @pytest.fixture
@@ -60,3 +60,8 @@ def test_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         for d in sorted(src.iterdir())
         if (d / "variables.json").is_file()
     }
+
+
+@pytest.fixture(scope="session")
+def msd_file() -> Path:
+    return builtin_fmu("msd")
