@@ -44,6 +44,10 @@ from fmuid.progress import Progress, ProgressCallback
 log = logging.getLogger(__name__)
 
 
+POLISH = FitOptions(ftol=1e-9, xtol=1e-9, gtol=1e-9, max_nfev=100)
+"""Trust-region settings that bring a candidate's fit to convergence."""
+
+
 @dataclass(frozen=True)
 class DiagnoseOptions:
     """Settings of a diagnosis.
@@ -61,7 +65,10 @@ class DiagnoseOptions:
         lag on the input or on the outputs of a linear model); the first in catalogue order
         is named.
     max_nfev
-        Cap on residual evaluations of each candidate's trust-region refinement.
+        Cap on residual evaluations of each candidate's quick trust-region fit.
+    polish, polish_bic
+        At most ``polish`` candidates within ``polish_bic`` of the best BIC are then refined
+        to convergence (:data:`POLISH`) before they are compared.
     scan_points
         Grid points of the warm-start scan over each added parameter's range.
     workers
@@ -79,6 +86,8 @@ class DiagnoseOptions:
     max_nfev: int = 15
     scan_points: int = 7
     workers: int = 1
+    polish: int = 3
+    polish_bic: float = 20.0
     walk: WalkOptions = WalkOptions(  # noqa: B008 (frozen value)
         rise_per_step=0.15,
         margin=0.0,
@@ -303,18 +312,29 @@ def diagnose_problem(
         stage: int, applied: list[Candidate], start: dict[str, float], chi2_prev: float,
         pool: Sequence[Candidate],
     ) -> list[tuple[CandidateScore, Candidate, Problem, np.ndarray]]:
-        scored = []
-        for c in pool:
-            aug = augmented(problem, [*applied, c], opts.ci_confidence)
-            z, chi2 = _fit_candidate(aug, start, c.parameters, opts)
+        def scored_fit(
+            c: Candidate, aug: Problem, z: np.ndarray, chi2: float
+        ) -> tuple[CandidateScore, Candidate, Problem, np.ndarray]:
             values = aug.from_z(z)
             drop = max(chi2_prev - chi2, 0.0)
             score = CandidateScore(
                 c.effect, {k: values[k] for k in c.names}, chi2,
                 float(stats.chi2.sf(drop, len(c.names))), chi2 + aug.n_free * np.log(n), stage,
             )  # fmt: skip
-            scored.append((score, c, aug, z))
+            return score, c, aug, z
+
+        scored = []
+        for c in pool:
+            aug = augmented(problem, [*applied, c], opts.ci_confidence)
+            z, chi2 = _fit_candidate(aug, start, c.parameters, opts)
+            scored.append(scored_fit(c, aug, z, chi2))
             report(f"round {stage}: {c.label} chi2 {chi2:.4g}")
+        scored.sort(key=lambda s: s[0].bic)
+        # the quick fits rank the candidates; the leading ones are refined to convergence
+        lead = [s for s in scored if s[0].bic - scored[0][0].bic < opts.polish_bic]
+        for s in lead[: opts.polish]:
+            z, chi2, _ = refine(s[2], s[3], options=POLISH)
+            scored[scored.index(s)] = scored_fit(s[1], s[2], z, min(chi2, s[0].chi2))
         scored.sort(key=lambda s: s[0].bic)
         same = [s for s in scored if s[0].chi2 - scored[0][0].chi2 < opts.equivalent_chi2]
         first = min(same, key=lambda s: pool.index(s[1]))
