@@ -13,6 +13,7 @@ import pytest
 import schemathesis
 from api_helpers import Service
 from hypothesis import HealthCheck, given, settings
+from schemathesis.checks import CheckFunction
 from schemathesis.specs.openapi.checks import positive_data_acceptance
 
 from fmuid.api import create_app
@@ -24,7 +25,9 @@ EXAMPLES = 40
 # A schema-valid submission is still refused (422) unless its spec is JSON naming the FMU's
 # variables and its files are CSV that fit it, which no JSON schema can say: the check that
 # schema-valid requests are accepted does not apply to ``POST /v1/jobs``.
-NOT_APPLICABLE = {("/v1/jobs", "POST"): [positive_data_acceptance]}
+NOT_APPLICABLE: dict[tuple[str, str], list[CheckFunction]] = {
+    ("/v1/jobs", "POST"): [positive_data_acceptance]
+}
 
 
 def _operations() -> list[tuple[str, str]]:
