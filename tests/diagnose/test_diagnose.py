@@ -37,6 +37,12 @@ def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
     assert result["effect"] is None
     assert result["evidence"] == []
     assert result["chi2_after"] == result["chi2_before"]
+    contract = {
+        "mismatch", "evidence", "location", "effect", "description", "candidates",
+        "added_parameters", "chi2_before", "chi2_after", "parameters",
+    }  # fmt: skip
+    assert contract <= set(result)
+    assert set(result["parameters"]) == set(ft.BOUNDS)
 
 
 @pytest.mark.slow
