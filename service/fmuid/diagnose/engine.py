@@ -190,6 +190,7 @@ def _experiments_disagree(
         )  # fmt: skip
         _, chi2, _ = refine(one, z0, options=FitOptions(ftol=1e-8, max_nfev=opts.max_nfev))
         separate += chi2
+        problem.simulations += one.simulations
     stat = max(fit.chi2 - separate, 0.0)
     df = (len(problem.experiments) - 1) * problem.n_free
     p = float(stats.chi2.sf(stat, df))
@@ -302,6 +303,10 @@ def diagnose_problem(
     )  # fmt: skip
     total = 2 * len(cands) + 2
     done = [0]
+    made: list[Problem] = []
+
+    def spent() -> int:
+        return problem.simulations - sims0 + sum(p.simulations for p in made)
 
     def report(detail: str) -> None:
         done[0] += 1
@@ -326,6 +331,7 @@ def diagnose_problem(
         scored = []
         for c in pool:
             aug = augmented(problem, [*applied, c], opts.ci_confidence)
+            made.append(aug)
             z, chi2 = _fit_candidate(aug, start, c.parameters, opts)
             scored.append(scored_fit(c, aug, z, chi2))
             report(f"round {stage}: {c.label} chi2 {chi2:.4g}")
@@ -372,13 +378,14 @@ def diagnose_problem(
             description=_unexplained_text(best_score, worst, correction, location),
             candidates=tuple(scores), added_parameters={}, chi2_after=fit.chi2,
             lrt_p_value=best_score.p_value, bic_after=bic_before, parameters_after=before,
-            generic_correction=correction,
-            cost=Cost(problem.simulations - sims0, time.perf_counter() - t0), **common,
+            generic_correction=correction, cost=Cost(spent(), time.perf_counter() - t0),
+            **common,
         )  # fmt: skip
     added = [p for c in applied for p in c.parameters]
     prof = profile_problem(
         aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk
     )
+    remote = prof.cost.simulations - final_fit.cost.simulations if opts.workers != 1 else 0
     final_fit = prof.fit
     estimates = {
         p.name: _added_estimate(
@@ -394,7 +401,7 @@ def diagnose_problem(
         candidates=tuple(scores), added_parameters=estimates, chi2_after=final_fit.chi2,
         lrt_p_value=lrt, bic_after=final_fit.chi2 + aug.n_free * np.log(n),
         parameters_after=dict(final_fit.estimates), second_effect=second, indistinguishable=ties,
-        cost=Cost(problem.simulations - sims0 + prof.cost.simulations, time.perf_counter() - t0),
+        cost=Cost(spent() + max(remote, 0), time.perf_counter() - t0),
         **common,
     )  # fmt: skip
 
