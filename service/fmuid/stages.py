@@ -11,6 +11,7 @@ from fmuid.fit.optimize import fit_problem
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import FitResult
 from fmuid.model.fmu import FmuModel
+from fmuid.model.simulator import get_simulator
 from fmuid.profile.engine import profile_problem
 from fmuid.profile.result import ProfileResult
 from fmuid.progress import ProgressCallback
@@ -22,11 +23,13 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
     Raises
     ------
     FmuError, SpecError, DataError
-        When the FMU cannot be used, or the spec or data do not fit its variables.
+        When the FMU cannot be used (its binary is loaded and instantiated here), or the spec
+        or data do not fit its variables.
 
     """
     model = FmuModel(Path(fmu))
     check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
+    get_simulator(fmu)
     return Problem(fmu, experiments, spec)
 
 

@@ -61,14 +61,9 @@ def fmi3(msd: Path, target: Path) -> Path:
         (fmi3, "3.0"),
         (model_exchange_only, "co-simulation"),
         (lambda msd, t: rewrite_fmu(msd, t, {"binaries/linux64/msd.so": None}), "linux64"),
-        pytest.param(
+        (
             lambda msd, t: rewrite_fmu(msd, t, {"binaries/linux64/msd.so": b"\x7fELF junk"}),
             "msd.so",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="engine: fmpy's load error escapes fmuid.model.simulator as a plain"
-                " Exception, so the CLI exits 1 ('internal error') instead of 2",
-            ),
         ),
     ],
     ids=["not-a-zip", "fmi3", "model-exchange", "no-linux64", "binary-not-loading"],

@@ -13,7 +13,7 @@ from pymoo.core.problem import Problem as PymooProblem
 from pymoo.optimize import minimize as pymoo_minimize
 from scipy.optimize import least_squares
 
-from fmuid.errors import FmuError, FmuidError
+from fmuid.errors import FmuError
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import Cost, FitResult
 from fmuid.progress import Progress, ProgressCallback
@@ -210,7 +210,7 @@ def fit_problem(
         if best is None or chi2 < best[1]:
             best = (z, chi2, message)
     if best is None:
-        raise FmuidError(f"the fit failed: {'; '.join(errors)}")
+        raise FmuError(f"the fit failed: {'; '.join(errors)}")
     z, chi2, message = best
     jac = jacobian(problem, z)
     return make_fit_result(problem, z, chi2, jac, message, global_search, t0, sims0)

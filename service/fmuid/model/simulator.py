@@ -60,13 +60,19 @@ class Simulator:
         self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        self._slave = FMU2Slave(
-            guid=self.model.guid,
-            unzipDirectory=self._unzip_dir,
-            modelIdentifier=self.model.model_identifier,
-            instanceName=self.model.model_name,
-        )
-        dll = self._slave.dll
+        try:
+            self._slave = FMU2Slave(
+                guid=self.model.guid,
+                unzipDirectory=self._unzip_dir,
+                modelIdentifier=self.model.model_identifier,
+                instanceName=self.model.model_name,
+            )
+            dll = self._slave.dll
+        except Exception as exc:  # fmpy raises bare Exception when the library does not load
+            raise FmuError(
+                f"FMU {self.path}: its binary for linux64 does not load: {exc}",
+                function="dlopen",
+            ) from exc
         self._reset = dll.fmi2Reset
         self._setup = dll.fmi2SetupExperiment
         self._enter = dll.fmi2EnterInitializationMode
