@@ -121,10 +121,7 @@ def run_engine(
                         f"cannot reach the dask scheduler at {dask_scheduler}: {exc}"
                     ) from exc
             return fmuid.profile(fmu, experiments, spec, progress=progress, executor=executor)
-    diagnose = getattr(fmuid, "diagnose", None)
-    if diagnose is None:
-        raise FmuidError("jobs of kind 'diagnose' are not available: fmuid.diagnose is missing")
-    return diagnose(fmu, experiments, spec, progress=progress)
+    return fmuid.diagnose(fmu, experiments, spec, progress=progress)
 
 
 def write_report(
