@@ -64,6 +64,8 @@ def run_case(effect: str | None, level: int, seed: int) -> dict[str, object]:
     t0 = time.perf_counter()
     d = diagnose(builtin_fmu("tractor_implement"), case.experiments, study_spec()).to_dict()
     name = PARAMETER.get(effect or "", f"bias_{case.bias_output}")
+    if effect in d["indistinguishable"] and d["effect"] in PARAMETER:
+        name = PARAMETER[d["effect"]]  # an equivalent model names the same magnitude
     added = d["added_parameters"].get(name)
     contains = None
     if added is not None and effect in CATALOGUE:
