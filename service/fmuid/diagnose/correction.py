@@ -42,6 +42,7 @@ def arx_correction(series: Sequence[Series]) -> dict[str, Any]:
     -------
     dict
         ``model`` (description), ``chi2_before``, ``chi2_after``, ``n_parameters``,
+        ``n_data``, ``noise_chi2`` (what noise alone would leave: ``n_data - n_parameters``),
         ``structure_fraction`` ((before - after) / before) and ``p_value`` (F test of the
         correction against none), plus the same per output under ``outputs``.
 
@@ -86,6 +87,8 @@ def arx_correction(series: Sequence[Series]) -> dict[str, Any]:
         "chi2_before": total_before,
         "chi2_after": total_after,
         "n_parameters": total_k,
+        "n_data": total_n,
+        "noise_chi2": float(total_n - total_k),
         "structure_fraction": (total_before - total_after) / total_before if total_before else 0.0,
         "p_value": float(stats.f.sf(f_all, max(total_k, 1), max(total_n - total_k, 1))),
         "outputs": per_output,

@@ -447,5 +447,6 @@ def _unexplained_text(
         f"candidate, {best.effect} (likelihood-ratio p = {best.p_value:.2g}), still leaves "
         f"{worst.test} at p = {worst.p_value:.2g}. A generic {correction['model']} reduces chi2 "
         f"from {correction['chi2_before']:.4g} to {correction['chi2_after']:.4g} "
-        f"({float(correction['structure_fraction']):.0%} of the misfit is structure)."  # type: ignore[arg-type]
+        f"(noise alone would leave about {correction['noise_chi2']:.4g}; "
+        f"{float(correction['structure_fraction']):.0%} of the misfit is structure)."  # type: ignore[arg-type]
     )
