@@ -60,6 +60,7 @@ class Simulator:
         self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+        cwd = os.getcwd()
         try:
             self._slave = FMU2Slave(
                 guid=self.model.guid,
@@ -73,6 +74,8 @@ class Simulator:
                 f"FMU {self.path}: its binary for linux64 does not load: {exc}",
                 function="dlopen",
             ) from exc
+        finally:
+            os.chdir(cwd)  # fmpy changes into the binary's folder and may not change back
         self._reset = dll.fmi2Reset
         self._setup = dll.fmi2SetupExperiment
         self._enter = dll.fmi2EnterInitializationMode
