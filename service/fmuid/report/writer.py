@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
-import inspect
 import logging
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -12,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 from matplotlib.figure import Figure
 
+from fmuid.diagnose.plots import figures as diagnose_figures
 from fmuid.errors import FmuidError
 from fmuid.fit.result import FitResult
 from fmuid.plots import (
@@ -295,26 +293,17 @@ def _diagnosis_sections(
         page.table(
             keys, [[_plain(c.get(k)) for k in keys] for c in d["candidates"]], caption="Candidates"
         )
-    figures = _diagnose_figures(
-        diagnosis, problem=problem, experiments=experiments, spec=spec, fmu=fmu
-    )
-    if figures:
-        page.heading("Figures")
-        for caption, fig in figures.items():
-            page.figure(fig, f"diagnose_{caption}", caption)
-
-
-def _diagnose_figures(diagnosis: Any, **available: Any) -> dict[str, Figure]:
-    """Call ``fmuid.diagnose.plots.figures`` with the keyword arguments it accepts."""
-    if importlib.util.find_spec("fmuid.diagnose.plots") is None:
-        return {}
-    module = importlib.import_module("fmuid.diagnose.plots")
-    figures: Callable[..., dict[str, Figure]] | None = getattr(module, "figures", None)
-    if figures is None:
-        return {}
-    params = inspect.signature(figures).parameters
-    kwargs = {k: v for k, v in available.items() if k in params and v is not None}
-    return dict(figures(diagnosis, **kwargs))
+    if problem is None:
+        return
+    try:
+        figures = diagnose_figures(diagnosis, problem)
+    except FmuidError as error:
+        logger.warning("diagnosis figures not drawn: %s", error)
+        page.paragraph(f"Figures not drawn: {error}", note=True)
+        return
+    page.heading("Figures")
+    for caption, fig in figures.items():
+        page.figure(fig, f"diagnose_{caption}", caption)
 
 
 def _try_figure(page: HtmlPage, name: str, caption: str, draw: Callable[[], Figure]) -> None:
