@@ -142,17 +142,23 @@ def _fit_candidate(
     """Scan each added parameter over its range from ``start``, then refine everything."""
     values = {**start, **{p.name: p.spec.start for p in added}}
     z = problem.to_z(values)
-    best = float(np.sum(safe_residuals(problem, z) ** 2))
+    tried = [(float(np.sum(safe_residuals(problem, z) ** 2)), z)]
     for p in added:
         i = problem.names.index(p.name)
+        span = problem.z_upper[i] - problem.z_lower[i]
         for zi in np.linspace(problem.z_lower[i], problem.z_upper[i], opts.scan_points):
-            trial = z.copy()
+            if abs(zi - z[i]) < 1e-9 * span:
+                continue  # the start itself (a round-off neighbour of it can stall the fit)
+            trial = tried[0][1].copy()
             trial[i] = zi
-            chi2 = float(np.sum(safe_residuals(problem, trial) ** 2))
-            if chi2 < best:
-                best, z = chi2, trial
-    z, chi2, _ = refine(problem, z, options=FitOptions(ftol=1e-8, xtol=1e-8, gtol=1e-8,
-                                                         max_nfev=opts.max_nfev))
+            tried.append((float(np.sum(safe_residuals(problem, trial) ** 2)), trial))
+        tried.sort(key=lambda t: t[0])
+    options = FitOptions(ftol=1e-8, xtol=1e-8, gtol=1e-8, max_nfev=opts.max_nfev)
+    z, chi2, _ = refine(problem, tried[0][1], options=options)
+    if chi2 > tried[0][0] - 1e-3 and len(tried) > 1:  # no progress: try the runner-up start
+        z2, chi2_2, _ = refine(problem, tried[1][1], options=options)
+        if chi2_2 < chi2:
+            z, chi2 = z2, chi2_2
     return z, chi2
 
 
@@ -363,6 +369,25 @@ def diagnose_problem(
             fit2 = make_fit_result(aug2, z2, s2.chi2, jacobian(aug2, z2), "", False, t0, 0)
             tests2 = _tests(aug2, fit2, opts)
             applied, aug, final_fit, tests_after, second = [best, c2], aug2, fit2, tests2, c2.effect
+            # backward step: is the first effect still needed once the second is in?
+            alone = next(s for s in first if s[1] is c2)
+            z_alone, chi2_alone, _ = refine(alone[2], alone[3], options=POLISH)
+            chi2_alone = min(chi2_alone, alone[0].chi2)
+            redundant = stats.chi2.sf(max(chi2_alone - s2.chi2, 0.0), len(best.names)) >= level
+            if redundant:
+                fit1 = make_fit_result(alone[2], z_alone, chi2_alone, jacobian(alone[2], z_alone),
+                                       "", False, t0, 0)  # fmt: skip
+                tests1 = _tests(alone[2], fit1, opts)
+                if not rt.holm(tests1, opts.alpha):
+                    drop = max(fit.chi2 - chi2_alone, 0.0)
+                    best_score = CandidateScore(
+                        c2.effect, {k: fit1.estimates[k] for k in c2.names}, chi2_alone,
+                        float(stats.chi2.sf(drop, len(c2.names))),
+                        chi2_alone + alone[2].n_free * np.log(n), 1,
+                    )  # fmt: skip
+                    scores = [best_score, *(s for s in scores if s is not alone[0])]
+                    best, applied, aug, final_fit = c2, [c2], alone[2], fit1
+                    tests_after, second = tests1, None
     report("tests of the augmented model")
     explained = best_score.p_value < level and not rt.holm(tests_after, opts.alpha)
     ties = tuple(
