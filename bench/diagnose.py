@@ -57,6 +57,27 @@ def study_spec() -> object:
     )
 
 
+def effect_chi2(case: ft.Case) -> float:
+    """Chi2 the effect alone adds at the true parameters: how observable it is at best."""
+    if case.effect is None:
+        return 0.0
+    total = 0.0
+    for exp in case.experiments:
+        t_in, u_in = exp.input_samples("delta")
+        mask = exp.output_mask("gam_t")
+        t = exp.time[mask]
+        base = ft.simulate_truth(case.truth, t_in, u_in, t)
+        with_effect = dict(base)
+        if case.effect == "gyro_bias":
+            with_effect[case.bias_output] = base[case.bias_output] + case.magnitude
+        else:
+            with_effect = ft.simulate_truth(case.truth, t_in, u_in, t, case.effect, case.magnitude)
+        for output in ("gam_t", "gam_i"):
+            d = (with_effect[output] - base[output]) / exp.columns[f"sigma_{output}"][mask]
+            total += float(d @ d)
+    return total
+
+
 def run_case(effect: str | None, level: int, seed: int) -> dict[str, object]:
     """Diagnose one case and return what the table needs."""
     magnitude = ft.MAGNITUDES[effect][level] if effect else 0.0
@@ -84,6 +105,7 @@ def run_case(effect: str | None, level: int, seed: int) -> dict[str, object]:
         "contains": contains,
         "chi2": [round(d["chi2_before"], 1), round(d["chi2_after"], 1)],
         "n_data": d["n_data"],
+        "effect_chi2": round(effect_chi2(case), 1),
         "seconds": round(time.perf_counter() - t0, 1),
     }
 
@@ -147,6 +169,12 @@ def print_table(rows: list[dict[str, object]]) -> None:
             + (f"{sum(ci)}/{len(ci)}".rjust(19) if ci else "-".rjust(19))
         )
     seconds = [float(r["seconds"]) for r in rows]  # type: ignore[arg-type]
+    hidden = [r for r in rows if r["named"] == "none" and r["effect"] != "control"]
+    for r in hidden:
+        print(
+            f"missed: {r['effect']} level {r['level']} seed {r['seed']}: the effect alone adds "
+            f"chi2 {r.get('effect_chi2', '?')} over {r['n_data']} data at the true parameters"
+        )
     print(f"\n{len(rows)} cases, median {sorted(seconds)[len(seconds) // 2]:.0f} s per diagnosis")
 
 
