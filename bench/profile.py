@@ -16,19 +16,11 @@ import numpy as np
 
 import fmuid
 from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.demo import BOUNDS, NOMINAL
 from fmuid.fit.optimize import fit_problem
 from fmuid.model.builtin import builtin_fmu
 from fmuid.model.simulator import Simulator
 from fmuid.stages import make_problem
-
-TIRES = {
-    "C_atf": (220000.0, 10000.0, 700000.0),
-    "C_atr": (486000.0, 10000.0, 700000.0),
-    "C_air": (167000.0, 10000.0, 700000.0),
-    "sig_tf": (0.5, 0.1, 2.0),
-    "sig_tr": (1.0, 0.1, 2.0),
-    "sig_ir": (0.5, 0.1, 2.0),
-}
 
 
 def dataset(fmu, snr: float, seed: int):
@@ -47,7 +39,8 @@ def dataset(fmu, snr: float, seed: int):
         json.dumps(
             {
                 "parameters": {
-                    n: {"start": v, "lower": lo, "upper": hi} for n, (v, lo, hi) in TIRES.items()
+                    n: {"start": v, "lower": BOUNDS[n][0], "upper": BOUNDS[n][1]}
+                    for n, v in NOMINAL.items()
                 },
                 "inputs": ["delta"],
                 "outputs": {"gam_t": {"sigma": sigma}, "gam_i": {"sigma": sigma}},

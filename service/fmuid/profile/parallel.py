@@ -36,6 +36,20 @@ class BranchTask:
     sd_z: float
     options: WalkOptions
 
+    def walk(self, on_point: Callable[[int], None]) -> BranchResult:
+        """Walk the branch, calling ``on_point`` with the points done after each point."""
+        return walk_branch(
+            self.problem,
+            self.z_hat,
+            self.chi2_hat,
+            self.index,
+            self.direction,
+            self.threshold,
+            self.sd_z,
+            self.options,
+            on_point=on_point,
+        )
+
 
 def run_branch(task: BranchTask) -> BranchResult:
     """Walk one branch, reporting points to the parent process when it listens."""
@@ -44,17 +58,7 @@ def run_branch(task: BranchTask) -> BranchResult:
         if _PROGRESS_QUEUE is not None:
             _PROGRESS_QUEUE.put((task.index, task.direction, n))
 
-    return walk_branch(
-        task.problem,
-        task.z_hat,
-        task.chi2_hat,
-        task.index,
-        task.direction,
-        task.threshold,
-        task.sd_z,
-        task.options,
-        on_point=on_point,
-    )
+    return task.walk(on_point)
 
 
 def _init_worker(progress_queue: Any) -> None:
@@ -99,19 +103,7 @@ def run_branches(
                 if on_point:
                     on_point(task.index, task.direction, k)
 
-            out.append(
-                walk_branch(
-                    task.problem,
-                    task.z_hat,
-                    task.chi2_hat,
-                    task.index,
-                    task.direction,
-                    task.threshold,
-                    task.sd_z,
-                    task.options,
-                    on_point=report,
-                )
-            )
+            out.append(task.walk(report))
         return out
     ctx = multiprocessing.get_context("fork")
     progress_queue = ctx.Queue()
