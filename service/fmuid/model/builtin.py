@@ -27,7 +27,10 @@ def model_src_dir() -> Path:
 
 
 def builtin_fmu(name: str) -> Path:
-    """Path of the built-in FMU ``name``, building all built-in FMUs if it is missing.
+    """Path of the built-in FMU ``name``, building all built-in FMUs if it is missing or stale.
+
+    An FMU is stale when a file of ``model_src/`` is newer than it (checked only where the
+    sources exist, e.g. not in the container's runtime image).
 
     Parameters
     ----------
@@ -45,7 +48,15 @@ def builtin_fmu(name: str) -> Path:
             f"unknown built-in model {name!r}; the built-in models are {', '.join(BUILTIN_MODELS)}"
         )
     path = fmu_dir() / f"{name}.fmu"
-    if not path.is_file():
+    if not path.is_file() or _sources_newer_than(path):
         logger.info("building the built-in FMUs into %s", path.parent)
         build_fmus(model_src_dir(), path.parent)
     return path
+
+
+def _sources_newer_than(path: Path) -> bool:
+    src = model_src_dir()
+    if not src.is_dir():
+        return False
+    built = path.stat().st_mtime
+    return any(f.stat().st_mtime > built for f in src.rglob("*") if f.is_file())
