@@ -30,7 +30,7 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
     model = FmuModel(Path(fmu))
     check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
     get_simulator(fmu)
-    return Problem(fmu, experiments, spec)
+    return Problem(fmu, experiments, spec, model=model)
 
 
 def fit(

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
@@ -103,15 +106,25 @@ def _fit_figure(
     return fig
 
 
-def _residual_figure(diagnosis: Diagnosis, before: list[Series], after: list[Series]) -> Figure:
-    pairs = list(dict.fromkeys((s.experiment, s.output) for s in before))
+def _series_grid(series: list[Series]) -> tuple[Figure, Callable[[Series], Axes]]:
+    """Make a figure with one panel per (output row, experiment column) and a panel lookup."""
+    pairs = list(dict.fromkeys((s.experiment, s.output) for s in series))
     experiments = list(dict.fromkeys(e for e, _ in pairs))
     outputs = list(dict.fromkeys(o for _, o in pairs))
     fig = Figure(figsize=(4.5 * len(experiments), 2.4 * len(outputs)), layout="constrained")
     axes = np.atleast_2d(fig.subplots(len(outputs), len(experiments), squeeze=False))
+
+    def axes_of(s: Series) -> Axes:
+        return axes[outputs.index(s.output), experiments.index(s.experiment)]
+
+    return fig, axes_of
+
+
+def _residual_figure(diagnosis: Diagnosis, before: list[Series], after: list[Series]) -> Figure:
+    fig, axes_of = _series_grid(before)
     after_by = {(s.experiment, s.output): s for s in after}
     for s in before:
-        ax = axes[outputs.index(s.output), experiments.index(s.experiment)]
+        ax = axes_of(s)
         for w in diagnosis.windows:
             if w.experiment == s.experiment and w.output == s.output:
                 ax.axvspan(w.start, w.end, color="gold", alpha=0.4, lw=0)
@@ -123,31 +136,28 @@ def _residual_figure(diagnosis: Diagnosis, before: list[Series], after: list[Ser
         ax.set_title(f"{s.experiment}: {s.output}", fontsize=9)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("weighted residual")
-    axes[0, 0].legend(fontsize=7)
+    fig.axes[0].legend(fontsize=7)
     fig.suptitle("Weighted residuals (shaded: located windows)")
     return fig
 
 
 def _spectrum_figure(diagnosis: Diagnosis, before: list[Series], after: list[Series]) -> Figure:
-    pairs = list(dict.fromkeys((s.experiment, s.output) for s in before))
-    experiments = list(dict.fromkeys(e for e, _ in pairs))
-    outputs = list(dict.fromkeys(o for _, o in pairs))
-    fig = Figure(figsize=(4.5 * len(experiments), 2.4 * len(outputs)), layout="constrained")
-    axes = np.atleast_2d(fig.subplots(len(outputs), len(experiments), squeeze=False))
+    fig, axes_of = _series_grid(before)
     after_by = {(s.experiment, s.output): s for s in after}
     band = diagnosis.location.get("frequency_hz")
     for s in before:
-        ax = axes[outputs.index(s.output), experiments.index(s.experiment)]
+        ax = axes_of(s)
         curves = [(s, "tab:red", "base")]
         a = after_by.get((s.experiment, s.output))
         if a is not None and diagnosis.added_parameters:
             curves.append((a, "tab:blue", "augmented"))
+        n_freq = 0
         for series, color, label in curves:
             freq, power = periodogram(series)
+            n_freq = n_freq or len(power)
             smooth = np.convolve(power, np.ones(SMOOTH) / SMOOTH, mode="same")
             ax.semilogy(freq, smooth, color=color, label=label)
-        freq, power = periodogram(s)
-        k = max(1, len(power) // SMOOTH)
+        k = max(1, n_freq // SMOOTH)
         level = stats.gamma.isf(FALSE_ALARM / k, SMOOTH, scale=1.0 / SMOOTH)
         ax.axhline(1.0, color="k", lw=0.8, label="white-noise floor")
         ax.axhline(level, color="k", lw=0.8, ls=":", label="significance")
@@ -155,6 +165,6 @@ def _spectrum_figure(diagnosis: Diagnosis, before: list[Series], after: list[Ser
             ax.axvspan(band[0], band[1], color="gold", alpha=0.3, lw=0)
         ax.set_title(f"{s.experiment}: {s.output}", fontsize=9)
         ax.set_xlabel("frequency [Hz]")
-    axes[0, 0].legend(fontsize=7)
+    fig.axes[0].legend(fontsize=7)
     fig.suptitle("Residual spectrum against the noise floor")
     return fig

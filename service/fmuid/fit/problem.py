@@ -47,9 +47,10 @@ class Problem:
         parameters: Mapping[str, ParameterSpec] | None = None,
         sigma: list[dict[str, np.ndarray]] | None = None,
         sigma_method: Mapping[str, str] | None = None,
+        model: FmuModel | None = None,
     ):
         self.fmu_path = Path(fmu_path)
-        self.model = FmuModel(self.fmu_path)
+        self.model = model if model is not None else FmuModel(self.fmu_path)
         self.experiments = list(experiments)
         self.spec = spec
         params = dict(parameters if parameters is not None else spec.parameters)
