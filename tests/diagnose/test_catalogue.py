@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import fieldtruth as ft
-from fmuid.diagnose.catalogue import AugmentedPredictor
+from fmuid.diagnose.wrappers import AugmentedPredictor
 from fmuid.fit.predictor import FmuPredictor
 
 WRAPPERS = {

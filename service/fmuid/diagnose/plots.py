@@ -9,10 +9,11 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
-from fmuid.diagnose.catalogue import catalogue
-from fmuid.diagnose.engine import augmented, residual_series
+from fmuid.diagnose.catalogue import study_catalogue
+from fmuid.diagnose.locate import residual_series
 from fmuid.diagnose.residual_tests import FALSE_ALARM, Series, periodogram
 from fmuid.diagnose.result import Diagnosis
+from fmuid.diagnose.scan import augmented
 from fmuid.fit.problem import Problem
 
 SMOOTH = 5
@@ -31,18 +32,7 @@ def augmented_problem_of(problem: Problem, diagnosis: Diagnosis) -> Problem:
     """
     if not diagnosis.added_parameters:
         return problem
-    scale = {
-        o: max(float(np.max(np.abs(np.concatenate([d[j] for d in problem.data])))), 1e-12)
-        for j, o in enumerate(problem.outputs)
-    }
-    cands = catalogue(
-        problem.model.model_name,
-        list(problem.model.parameters),
-        problem.spec,
-        problem.inputs,
-        problem.outputs,
-        scale,
-    )
+    cands = study_catalogue(problem)
     added = set(diagnosis.added_parameters)
     chosen = [c for c in cands if set(c.names) <= added]
     return augmented(problem, chosen, problem.spec.confidence)

@@ -22,11 +22,18 @@ class CandidateScore:
     chi2
         Chi2 of the augmented fit.
     p_value
-        Likelihood-ratio test against the model it augments: chi2 drop vs chi2(df = added).
+        Likelihood-ratio test against the model it augments: the chi2 drop (``statistic``)
+        against chi-bar-square (off value at a bound) or chi2 (df = added parameters).
     bic
         ``chi2 + k ln(n)`` of the augmented model (k free parameters, n data).
     stage
         1 for the first round, 2 for the second (on top of the first effect).
+    statistic
+        The chi2 drop.
+    p_adjusted
+        ``p_value`` adjusted for the scan over every candidate of the round (min-P).
+    fitted
+        Whether every parameter was fitted (else the linearised screen's value).
 
     """
 
@@ -36,6 +43,9 @@ class CandidateScore:
     p_value: float
     bic: float
     stage: int = 1
+    statistic: float = 0.0
+    p_adjusted: float = 1.0
+    fitted: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form."""
@@ -46,6 +56,9 @@ class CandidateScore:
             "p_value": float(self.p_value),
             "bic": float(self.bic),
             "stage": self.stage,
+            "statistic": float(self.statistic),
+            "p_adjusted": float(self.p_adjusted),
+            "fitted": self.fitted,
         }
 
 
@@ -115,8 +128,10 @@ class Diagnosis:
     parameters_before: dict[str, float]
     parameters_after: dict[str, float]
     second_effect: str | None = None
-    indistinguishable: tuple[str, ...] = ()
+    indistinguishable: tuple[dict[str, Any], ...] = ()
     generic_correction: dict[str, Any] | None = None
+    absorbed: dict[str, Any] = field(default_factory=dict)
+    scan_p_value: float | None = None
     fmu: dict[str, str] = field(default_factory=dict)
     cost: Cost = Cost(0, 0.0)
 
@@ -153,6 +168,8 @@ class Diagnosis:
             "false_alarm": self.false_alarm,
             "second_effect": self.second_effect,
             "indistinguishable": list(self.indistinguishable),
+            "absorbed": self.absorbed,
+            "scan_p_value": None if self.scan_p_value is None else float(self.scan_p_value),
             "lrt_p_value": None if self.lrt_p_value is None else float(self.lrt_p_value),
             "bic_before": float(self.bic_before),
             "bic_after": float(self.bic_after),

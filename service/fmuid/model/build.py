@@ -18,8 +18,9 @@ import tempfile
 import uuid
 import xml.etree.ElementTree as ET
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import fmpy
 
@@ -59,6 +60,7 @@ class ModelTable:
     guid: str
     states: tuple[str, ...]
     variables: tuple[TableEntry, ...]
+    annotations: dict[str, Any] = field(default_factory=dict)
 
 
 def load_table(model_dir: Path) -> ModelTable:
@@ -97,8 +99,9 @@ def load_table(model_dir: Path) -> ModelTable:
     digest = hashlib.sha256(text.encode()).hexdigest()
     guid = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, f"fmuid:{model_dir.name}:{digest}")) + "}"
     return ModelTable(
-        model_dir.name, raw["description"], guid, tuple(raw["states"]), tuple(entries)
-    )
+        model_dir.name, raw["description"], guid, tuple(raw["states"]), tuple(entries),
+        raw.get("fmuid", {}),
+    )  # fmt: skip
 
 
 def render_header(table: ModelTable) -> str:
@@ -185,6 +188,8 @@ def render_model_description(table: ModelTable, units: dict[str, dict[str, int]]
     categories = ET.SubElement(root, "LogCategories")
     ET.SubElement(categories, "Category", name="logStatusError", description="Errors")
     ET.SubElement(root, "DefaultExperiment", startTime="0", stopTime="10", stepSize="0.2")
+    if table.annotations:
+        _render_annotations(ET.SubElement(root, "VendorAnnotations"), table.annotations)
     model_variables = ET.SubElement(root, "ModelVariables")
     for v in table.variables:
         scalar = ET.SubElement(
@@ -210,6 +215,26 @@ def render_model_description(table: ModelTable, units: dict[str, dict[str, int]]
             ET.SubElement(initial_unknowns, "Unknown", index=str(index))
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _render_annotations(parent: ET.Element, block: dict[str, Any]) -> None:
+    """Write the ``fmuid`` block of ``variables.json`` as a ``<Tool name="fmuid">`` annotation.
+
+    Switchable physics become ``<Physics effect description>`` elements holding one
+    ``<Parameter name off start lower upper .../>`` each; roles of variables (e.g. the steer
+    input) become ``<Role variable role/>``; all inside one ``<Model>`` element, as the FMI
+    schema allows one element per tool (read by :mod:`fmuid.diagnose.knowledge`).
+    """
+    tool = ET.SubElement(ET.SubElement(parent, "Tool", name="fmuid"), "Model")
+    for effect, physics in block.get("physics", {}).items():
+        element = ET.SubElement(
+            tool, "Physics", effect=effect, description=physics.get("description", "")
+        )
+        for name, attributes in physics["parameters"].items():
+            values = {k: str(v) for k, v in attributes.items()}
+            ET.SubElement(element, "Parameter", {"name": name, **values})
+    for variable, role in block.get("roles", {}).items():
+        ET.SubElement(tool, "Role", variable=variable, role=role)
 
 
 def _compile(src_dir: Path, model_dir: Path, include_dir: Path, library: Path) -> None:

@@ -1,0 +1,108 @@
+"""Locate: the residual tests of a fit, the experiments' agreement, and where the misfit sits."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from fmuid.diagnose import residual_tests as rt
+from fmuid.fit.optimize import FitOptions, refine
+from fmuid.fit.predictor import merged_inputs
+from fmuid.fit.problem import Problem
+from fmuid.fit.result import FitResult
+
+
+def residual_series(problem: Problem, values: dict[str, float]) -> list[rt.Series]:
+    """Weighted residuals of every experiment and output at ``values``, with the inputs."""
+    predictions = problem.predict(values)
+    out = []
+    for i, exp in enumerate(problem.experiments):
+        input_time, inputs = merged_inputs(exp, problem.inputs)
+        for j, output in enumerate(problem.outputs):
+            mask = problem.masks[i][j]
+            if mask.sum() < 2:
+                continue
+            t = exp.time[mask]
+            r = (problem.data[i][j] - predictions[i][output][mask]) / problem.sigma[i][output][mask]
+            u = {name: np.interp(t, input_time, v) for name, v in inputs.items()}
+            out.append(rt.Series(exp.name, output, t, r, u))
+    return out
+
+
+def sigma_known(problem: Problem) -> bool:
+    """Whether every output's sigma is given (not estimated from the data)."""
+    return all(m in ("given", "column") for m in problem.sigma_method.values())
+
+
+def residual_tests(problem: Problem, fit: FitResult) -> list[rt.TestResult]:
+    """Per-series residual tests of a fit and, when sigma is known, the global chi2 test."""
+    series = residual_series(problem, fit.estimates)
+    known = sigma_known(problem)
+    tests = rt.series_tests(series, known)
+    if known:
+        tests.append(rt.global_goodness_of_fit(fit.chi2, fit.n_data, problem.n_free))
+    return tests
+
+
+def experiments_disagree(
+    problem: Problem, fit: FitResult, max_nfev: int
+) -> rt.TestResult | None:
+    """Likelihood-ratio test that every experiment shares the parameters.
+
+    Each experiment is fitted alone, warm-started from the joint fit; the joint chi2 minus the
+    sum of the separate ones is chi2 with (experiments - 1) x parameters df (conservative when
+    a single experiment leaves parameters unidentifiable). A concealed effect often shows here:
+    each experiment hides it with other parameter values.
+    """
+    if len(problem.experiments) < 2:
+        return None
+    separate = 0.0
+    z0 = fit.z_estimate()
+    for i, exp in enumerate(problem.experiments):
+        one = Problem(
+            problem.fmu_path, [exp], problem.spec, predictor=problem.predictor,
+            parameters=problem.parameter_specs, sigma=[problem.sigma[i]],
+            sigma_method=problem.sigma_method, model=problem.model,
+        )  # fmt: skip
+        _, chi2, _ = refine(one, z0, options=FitOptions(ftol=1e-8, max_nfev=max_nfev))
+        separate += chi2
+        problem.simulations += one.simulations
+    stat = max(fit.chi2 - separate, 0.0)
+    df = (len(problem.experiments) - 1) * problem.n_free
+    p = float(stats.chi2.sf(stat, df))
+    return rt.TestResult("experiments_disagree", None, None, p, stat, df)
+
+
+def location(
+    problem: Problem, fit: FitResult, evidence: Sequence[rt.TestResult]
+) -> tuple[dict[str, Any], list[rt.Window]]:
+    """Return the outputs, experiments, time windows and band the evidence points to.
+
+    Without evidence on a particular series (a mismatch found by the scan or the experiments'
+    agreement), every series is searched.
+    """
+    pairs = {(t.experiment, t.output) for t in evidence if t.output is not None}
+    series = residual_series(problem, fit.estimates)
+    if not pairs:
+        pairs = {(s.experiment, s.output) for s in series}
+    chosen = [s for s in series if (s.experiment, s.output) in pairs]
+    found = [w for s in chosen for w in rt.windows(s)]
+    bands = [b for s in chosen if (b := rt.spectrum_band(s)) is not None]
+    spans = sorted([w.start, w.end] for w in found)
+    merged: list[list[float]] = []
+    for span in spans:
+        if merged and span[0] <= merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], span[1])
+        else:
+            merged.append(list(span))
+    band = max(bands, key=lambda b: b[2]) if bands else None
+    where = {
+        "outputs": sorted({o for _, o in pairs}),
+        "experiments": [e.name for e in problem.experiments if e.name in {x for x, _ in pairs}],
+        "time_windows": merged,
+        "frequency_hz": [band[0], band[1]] if band else None,
+    }
+    return where, found
