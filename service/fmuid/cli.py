@@ -160,7 +160,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, fmu, experiments, spec)
-    print(f"mismatch: {result.mismatch}; effect: {result.effect}")  # noqa: T201
+    print(result.to_dict()["verdict"])  # noqa: T201
     return EXIT_OK
 
 

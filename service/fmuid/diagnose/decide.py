@@ -43,8 +43,9 @@ AGREEMENT_WEIGHT = 0.1
 TIE_LEVEL = 0.05
 """Vuong's test must reject at this level for one candidate to be preferred over another."""
 
-EQUAL_PREDICTIONS = 1e-3
-"""Fitted predictions closer than this (weighted units, largest difference) are equal."""
+EQUAL_PREDICTIONS = 0.02
+"""Fitted predictions whose root-mean-square difference is below this share of sigma are
+equal: together they change chi2 by less than ``n * 0.02**2`` (0.4 for 1000 samples)."""
 
 NULL_DRAWS = 20000
 """Draws of the Gaussian null of the scan's smallest p-value."""
@@ -183,8 +184,9 @@ def ties(best: CandidateFit, others: Sequence[CandidateFit]) -> list[Tie]:
     for other in others:
         if other is best or not other.fitted:
             continue
-        gap = float(np.max(np.abs(other.residuals - best.residuals)))
-        if gap < EQUAL_PREDICTIONS:
+        difference = other.residuals - best.residuals
+        gap = float(np.max(np.abs(difference)))
+        if float(np.sqrt(np.mean(difference**2))) < EQUAL_PREDICTIONS:
             out.append(Tie(other, "equal_predictions", 0.0, 1.0, gap))
             continue
         z, p = vuong(best, other)

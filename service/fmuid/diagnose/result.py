@@ -152,7 +152,7 @@ class Diagnosis:
         }
         for name, value in self.parameters_before.items():
             params.setdefault(name, {"before": value, "after": None})
-        return {
+        out = {
             "mismatch": self.mismatch,
             "evidence": [t.to_dict() for t in self.evidence],
             "location": self.location,
@@ -181,3 +181,29 @@ class Diagnosis:
             "generic_correction": self.generic_correction,
             "cost": self.cost.to_dict(),
         }
+        return {"verdict": verdict(out), **out}
+
+
+def verdict(d: dict[str, Any]) -> str:
+    """One sentence from a diagnosis' JSON: mismatch or not, what explains it, how strongly."""
+    level = d.get("false_alarm", 0.01)
+    if not d.get("mismatch"):
+        return f"No mismatch: no test rejects the model at a family-wise level of {level:g}."
+    effect = d.get("effect")
+    if effect in (None, "unexplained"):
+        outputs = ", ".join((d.get("location") or {}).get("outputs") or []) or "the outputs"
+        return f"A mismatch in {outputs} that no catalogue entry explains."
+    p = d.get("lrt_p_value")
+    words = "evidence" if p is None else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else
+                                          "moderate") + f" evidence (p = {p:.2g})"  # fmt: skip
+    evidence = d.get("evidence") or []
+    hidden = bool(evidence) and all(
+        e.get("test") in ("catalogue_scan", "experiments_disagree") for e in evidence
+    )
+    out = f"{effect} explains the mismatch, with {words}"
+    if hidden:
+        out += ", although the base model's residuals look like noise"
+    ties = [t["effect"] if isinstance(t, dict) else str(t) for t in d.get("indistinguishable", [])]
+    if ties:
+        out += f"; {', '.join(ties)} explain{'s' if len(ties) == 1 else ''} it equally well"
+    return out + "."

@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Any
 
 from matplotlib.figure import Figure
 
-from fmuid.diagnose.plots import figures as diagnose_figures
 from fmuid.errors import FmuidError
 from fmuid.fit.result import FitResult
 from fmuid.plots import (
@@ -19,6 +18,7 @@ from fmuid.plots import (
     trajectory_band_figure,
 )
 from fmuid.profile.result import ProfileResult
+from fmuid.report.diagnosis import diagnosis_sections
 from fmuid.report.page import HtmlPage, interval
 
 if TYPE_CHECKING:
@@ -79,7 +79,7 @@ def write_report(
         _fit_sections(page, result, problem)
     else:
         page = HtmlPage(Path(directory), "Model discrepancy diagnosis")
-        _diagnosis_sections(page, result, problem, experiments, spec, fmu)
+        diagnosis_sections(page, result, problem)
     for caption, fig in (extra_figures or {}).items():
         page.figure(fig, f"extra_{caption}", caption)
     return page.write()
@@ -235,75 +235,6 @@ def _structural(page: HtmlPage, check: Mapping[str, Any]) -> None:
         )
     else:
         page.paragraph("No non-identifiable parameter combination was found.")
-
-
-def _diagnosis_sections(
-    page: HtmlPage,
-    diagnosis: Any,
-    problem: Problem | None,
-    experiments: Sequence[Experiment] | None,
-    spec: Spec | None,
-    fmu: Path | str | None,
-) -> None:
-    d = diagnosis.to_dict()
-    page.heading("Summary")
-    effect = d.get("effect")
-    page.table(
-        ["quantity", "value"],
-        [
-            ["mismatch", bool(d.get("mismatch"))],
-            ["effect", effect if effect is not None else "none"],
-            ["chi2 before", d.get("chi2_before")],
-            ["chi2 after", d.get("chi2_after")],
-        ],
-        table_id="diagnosis",
-    )
-    if d.get("description"):
-        page.paragraph(str(d["description"]))
-    loc = d.get("location") or {}
-    if loc:
-        page.table(
-            ["where", "value"],
-            [[k, _plain(v)] for k, v in loc.items()],
-            caption="Location of the mismatch",
-        )
-    page.table(
-        ["parameter", "before", "after"],
-        [[n, v.get("before"), v.get("after")] for n, v in d.get("parameters", {}).items()],
-        table_id="summary",
-        caption="Free parameters before and after the augmentation",
-    )
-    added = d.get("added_parameters") or {}
-    if added:
-        page.table(
-            ["added parameter", "estimate", "CI"],
-            [
-                [n, v.get("estimate"), interval(v.get("ci") or (None, None))]
-                for n, v in added.items()
-            ],
-            caption="Parameters of the added physics",
-        )
-    if d.get("evidence"):
-        keys = list(dict.fromkeys(k for e in d["evidence"] for k in e))
-        page.table(
-            keys, [[_plain(e.get(k)) for k in keys] for e in d["evidence"]], caption="Evidence"
-        )
-    if d.get("candidates"):
-        keys = list(dict.fromkeys(k for c in d["candidates"] for k in c))
-        page.table(
-            keys, [[_plain(c.get(k)) for k in keys] for c in d["candidates"]], caption="Candidates"
-        )
-    if problem is None:
-        return
-    try:
-        figures = diagnose_figures(diagnosis, problem)
-    except FmuidError as error:
-        logger.warning("diagnosis figures not drawn: %s", error)
-        page.paragraph(f"Figures not drawn: {error}", note=True)
-        return
-    page.heading("Figures")
-    for caption, fig in figures.items():
-        page.figure(fig, f"diagnose_{caption}", caption)
 
 
 def _try_figure(page: HtmlPage, name: str, caption: str, draw: Callable[[], Figure]) -> None:

@@ -1,0 +1,152 @@
+"""The report page of a diagnosis: the verdict first, then plain tables and the figures."""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from fmuid.diagnose.plots import figures as diagnose_figures
+from fmuid.diagnose.result import verdict
+from fmuid.errors import FmuidError
+from fmuid.fit.problem import Problem
+from fmuid.report.page import HtmlPage, fmt, interval
+
+logger = logging.getLogger(__name__)
+
+TEST_NAMES = {
+    "catalogue_scan": "catalogue scan (best candidate, min-P adjusted)",
+    "experiments_disagree": "experiments want different parameters",
+    "residual_whiteness": "residual whiteness (Ljung-Box)",
+    "input_cross_correlation": "residual-input cross-correlation",
+    "residual_bias": "residual mean",
+    "chi2_goodness_of_fit": "chi2 against the noise",
+}
+
+
+def _params(values: dict[str, Any]) -> str:
+    return ", ".join(f"{k} = {fmt(v)}" for k, v in values.items())
+
+
+def _where(test: dict[str, Any]) -> str:
+    return " / ".join(str(test[k]) for k in ("experiment", "output") if test.get(k)) or "all"
+
+
+def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
+    added = d.get("added_parameters") or {}
+    if added:
+        page.table(
+            ["added parameter", "estimate", "unit", "interval", "excludes the off value"],
+            [
+                [n, v.get("estimate"), v.get("unit", ""), interval(v.get("ci") or (None, None)),
+                 "yes" if v.get("excludes_off") else "no"]
+                for n, v in added.items()
+            ],  # fmt: skip
+            caption="Parameters of the added physics (profile-likelihood interval)",
+        )
+    ties = [t for t in d.get("indistinguishable", []) if isinstance(t, dict)]
+    if ties:
+        page.table(
+            ["equally good effect", "parameters", "chi2", "test", "p-value"],
+            [[t["effect"], _params(t.get("parameters", {})), t.get("chi2"),
+              str(t.get("test", "")).replace("_", " "), t.get("p_value")] for t in ties],
+            caption="Explanations this data cannot tell apart from the named one",
+        )  # fmt: skip
+    absorbed = d.get("absorbed") or {}
+    if absorbed:
+        page.table(
+            ["parameter", "before", "status before", "after", "status after", "absorbs"],
+            [
+                [n, f"{fmt(a['before']['estimate'])} {interval(a['before']['ci'])}",
+                 a["before"]["status"].replace("_", " "),
+                 f"{fmt(a['after']['estimate'])} {interval(a['after']['ci'])}",
+                 a["after"]["status"].replace("_", " "),
+                 "; ".join(a.get("reasons") or []) or "no"]
+                for n, a in absorbed.items()
+            ],  # fmt: skip
+            caption="The original parameters without and with the added term",
+        )
+    if d.get("evidence"):
+        page.table(
+            ["test", "where", "p-value"],
+            [[TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
+             for e in d["evidence"]],  # fmt: skip
+            caption="Evidence of the mismatch (tests rejected at the family-wise level)",
+        )
+    if d.get("candidates"):
+        page.table(
+            ["effect", "parameters", "chi2", "LR statistic", "p-value", "adjusted p", "round"],
+            [[c["effect"], _params(c.get("parameters", {})), c.get("chi2"), c.get("statistic"),
+              c.get("p_value"), c.get("p_adjusted"), c.get("stage", 1)]
+             for c in d["candidates"]],  # fmt: skip
+            caption="Every candidate of the catalogue",
+        )
+    correction = d.get("generic_correction")
+    if correction:
+        dyn = correction.get("dynamics") or {}
+        mode = dyn.get("mode")
+        lead = dyn.get("leads")
+        share = correction.get("structure_fraction")
+        rows = [
+            ["model", correction.get("model")],
+            ["chi2 before / after", f"{fmt(correction['chi2_before'])} / "
+                                    f"{fmt(correction['chi2_after'])}"],
+            ["noise floor", correction.get("noise_chi2")],
+            ["share of the misfit that is structure",
+             "not given (the correction reaches the noise floor)" if share is None
+             else f"{share:.0%}"],
+            ["extra mode", "none found" if not mode else
+             f"{fmt(mode['frequency_hz'], 3)} Hz, damping ratio {fmt(mode['damping'], 2)}"],
+            ["band", interval(dyn["frequency_hz"]) + " Hz" if dyn.get("frequency_hz") else "none"],
+            ["leading output", "none" if not lead else
+             f"{lead['output']} leads {lead['other']} by {fmt(lead['seconds'], 3)} s"],
+        ]  # fmt: skip
+        page.table(["generic correction", "value"], rows, caption="What the misfit looks like")
+
+
+def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) -> None:
+    """Add the verdict, the tables and (with the problem) the figures of a diagnosis."""
+    d = diagnosis.to_dict()
+    page.heading("Verdict")
+    page.paragraph(d.get("verdict") or verdict(d))
+    if d.get("description"):
+        page.paragraph(str(d["description"]))
+    effect = d.get("effect")
+    page.table(
+        ["quantity", "value"],
+        [
+            ["mismatch", "yes" if d.get("mismatch") else "no"],
+            ["effect", effect if effect is not None else "none"],
+            ["chi2 before", d.get("chi2_before")],
+            ["chi2 after", d.get("chi2_after")],
+        ],
+        table_id="diagnosis",
+    )
+    loc = d.get("location") or {}
+    if loc:
+        windows = "; ".join(interval(w) for w in loc.get("time_windows") or [])
+        band = loc.get("frequency_hz")
+        rows = [
+            ["outputs", ", ".join(loc.get("outputs") or []) or "-"],
+            ["experiments", ", ".join(loc.get("experiments") or []) or "-"],
+            ["time windows [s]", windows or "-"],
+            ["frequency band [Hz]", interval(band) if band else "-"],
+        ]
+        page.table(["where", "value"], rows, caption="Location of the mismatch")
+    page.table(
+        ["parameter", "before", "after"],
+        [[n, v.get("before"), v.get("after")] for n, v in d.get("parameters", {}).items()],
+        table_id="summary",
+        caption="Free parameters before and after the augmentation",
+    )
+    _tables(page, d)
+    if problem is None:
+        return
+    try:
+        figures = diagnose_figures(diagnosis, problem)
+    except FmuidError as error:
+        logger.warning("diagnosis figures not drawn: %s", error)
+        page.paragraph(f"Figures not drawn: {error}", note=True)
+        return
+    page.heading("Figures")
+    for caption, fig in figures.items():
+        page.figure(fig, f"diagnose_{caption}", caption)
