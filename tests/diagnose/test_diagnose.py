@@ -1,17 +1,32 @@
-"""End to end: concealed effects in independent field truth are flagged, named and sized."""
+"""End to end on independent field truth: concealed effects are flagged, named and sized.
+
+Each effect case is checked first to be concealed in the operational sense of issue 11: the
+base fit's residuals pass Ljung-Box at 5 % on every channel and its reduced chi2 lies in the
+central 95 % noise band. The magnitudes are small enough for that, and the cases were picked
+by that criterion alone (the seed fixes truth, noise and design).
+"""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
+from scipy import stats
 
 import fieldtruth as ft
 from fmuid.data import Spec, spec_from_json
-from fmuid.diagnose import diagnose
+from fmuid.diagnose import DiagnoseOptions, diagnose
 from fmuid.diagnose.plots import figures
 from fmuid.stages import make_problem
+
+CONTRACT = {
+    "mismatch", "evidence", "location", "effect", "description", "candidates",
+    "added_parameters", "chi2_before", "chi2_after", "parameters", "indistinguishable",
+    "generic_correction", "absorbed",
+}  # fmt: skip
 
 
 def _spec() -> Spec:
@@ -30,6 +45,31 @@ def _spec() -> Spec:
     )
 
 
+def _ljung_box_p(r: np.ndarray) -> float:
+    """Independent Ljung-Box p-value with min(20, n / 5) lags."""
+    r = r - r.mean()
+    n, h = len(r), min(20, len(r) // 5)
+    rho = np.array([r[k:] @ r[:-k] for k in range(1, h + 1)]) / (r @ r)
+    q = n * (n + 2) * np.sum(rho**2 / (n - np.arange(1, h + 1)))
+    return float(stats.chi2.sf(q, h))
+
+
+def _assert_concealed(fmu: Path, case: ft.Case, result: dict[str, Any]) -> None:
+    problem = make_problem(fmu, case.experiments, _spec())
+    before = {n: result["parameters"][n]["before"] for n in ft.BOUNDS}
+    predictions = problem.predict(before)
+    for i, exp in enumerate(case.experiments):
+        for output in ("gam_t", "gam_i"):
+            mask = exp.output_mask(output)
+            r = (exp.columns[output][mask] - predictions[i][output][mask]) / exp.columns[
+                f"sigma_{output}"
+            ][mask]
+            assert _ljung_box_p(r) > 0.05, f"{exp.name}/{output} is not white: not concealed"
+    dof = result["n_data"] - len(ft.BOUNDS)
+    band = stats.chi2.ppf([0.025, 0.975], dof)
+    assert band[0] < result["chi2_before"] < band[1], "reduced chi2 outside the noise band"
+
+
 def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
     case = ft.make_case(None, seed=11, rate=5.0)
     result = diagnose(tractor_fmu, case.experiments, _spec()).to_dict()
@@ -37,40 +77,70 @@ def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
     assert result["effect"] is None
     assert result["evidence"] == []
     assert result["chi2_after"] == result["chi2_before"]
-    contract = {
-        "mismatch", "evidence", "location", "effect", "description", "candidates",
-        "added_parameters", "chi2_before", "chi2_after", "parameters",
-    }  # fmt: skip
-    assert contract <= set(result)
+    assert CONTRACT <= set(result)
     assert set(result["parameters"]) == set(ft.BOUNDS)
+    # the catalogue was scanned all the same, and found nothing at the 1 % level
+    assert {c["effect"] for c in result["candidates"]} >= {
+        "sensor_lag", "input_delay", "steering_lag", "steer_offset", "gyro_bias",
+        "tire_saturation", "side_slope",
+    }  # fmt: skip
+    assert result["scan_p_value"] > 0.01
+    assert result["verdict"].startswith("No mismatch")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("effect", "parameter", "level"),
+    ("effect", "parameter", "magnitude", "seed"),
     [
-        ("sensor_lag", "tau_sensor", 1),
-        ("steer_offset", "offset_steer", 0),
-        ("tire_saturation", "alpha_sat", 1),
+        ("sensor_lag", "tau_sensor", 0.04, 8),
+        ("steer_offset", "offset_steer", 0.0004, 8),
+        ("tire_saturation", "alpha_sat", 0.09, 5),
+        ("side_slope", "slope", 0.004, 8),
     ],
 )
-def test_concealed_effect_is_named_with_ci_holding_the_truth(
-    tractor_fmu: Path, effect: str, parameter: str, level: int
+def test_concealed_effect_is_found_named_and_sized(
+    tractor_fmu: Path, effect: str, parameter: str, magnitude: float, seed: int
 ) -> None:
-    magnitude = ft.MAGNITUDES[effect][level]
-    case = ft.make_case(effect, magnitude, seed=4, rate=5.0)
+    case = ft.make_case(effect, magnitude, seed=seed, rate=5.0)
     diagnosis = diagnose(tractor_fmu, case.experiments, _spec())
     result = diagnosis.to_dict()
+    _assert_concealed(tractor_fmu, case, result)
     assert result["mismatch"] is True
-    assert result["evidence"]
-    assert result["effect"] == effect
-    added = result["added_parameters"][parameter]
+    named = {result["effect"]} | {t["effect"] for t in result["indistinguishable"]}
+    assert effect in named
+    if result["effect"] == effect:
+        added = result["added_parameters"][parameter]
+    else:
+        tie = next(t for t in result["indistinguishable"] if t["effect"] == effect)
+        added = tie["intervals"][parameter]
     lo, hi = added["ci"]
     assert (lo is None or lo <= magnitude) and (hi is None or magnitude <= hi)
     assert added["excludes_off"] is True
     assert result["chi2_after"] < result["chi2_before"]
     assert result["lrt_p_value"] < 0.01
-    assert set(result["parameters"]) >= {*ft.BOUNDS, parameter}
+    # the original parameters re-profiled with the added term free
+    assert set(result["absorbed"]) == set(ft.BOUNDS)
+    for entry in result["absorbed"].values():
+        assert entry["before"]["status"] and entry["after"]["status"]
+        lo_b, hi_b = entry["before"]["ci"]
+        assert lo_b is None or lo_b <= entry["before"]["estimate"] <= (hi_b or np.inf)
     figs = figures(diagnosis, make_problem(tractor_fmu, case.experiments, _spec()))
     assert set(figs) == {"fit", "residuals", "spectrum"}
-    assert all(len(f.axes) == 4 for f in figs.values())
+
+
+@pytest.mark.slow
+def test_a_steering_lag_and_the_same_lag_on_both_outputs_are_listed_as_a_tie(
+    tractor_fmu: Path,
+) -> None:
+    case = ft.make_case("steering_lag", 0.05, seed=6, rate=5.0)
+    result = diagnose(tractor_fmu, case.experiments, _spec(), options=DiagnoseOptions(
+        absorbed=False)).to_dict()  # fmt: skip
+    pair = {"steering_lag", "sensor_lag"}
+    assert result["effect"] in pair
+    (other,) = pair - {result["effect"]}
+    tie = next(t for t in result["indistinguishable"] if t["effect"] == other)
+    assert tie["test"] == "equal_predictions"
+    assert other in result["verdict"]
+    name = "tau_steer" if other == "steering_lag" else "tau_sensor"
+    lo, hi = tie["intervals"][name]["ci"]
+    assert lo <= 0.05 <= hi

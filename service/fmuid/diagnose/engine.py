@@ -154,8 +154,31 @@ class _Run:
         )  # fmt: skip
         return fits, decide.min_p_adjusted(fits, self.problem.spec.seed + stage)
 
+    def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
+        """Count a profile: its problem's simulations, and those of worker processes."""
+        self.made[id(problem)] = problem
+        if self.opts.workers != 1:
+            self.extra += spent_elsewhere
+
     def cost(self) -> Cost:
         return Cost(self.spent(), time.perf_counter() - self.t0)
+
+
+def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
+    """Profile-likelihood intervals of an equally good candidate's added parameters."""
+    tie_fit = _fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
+    prof = profile_problem(
+        tie.problem, tie_fit, only=list(tie.candidate.names), workers=run.opts.workers,
+        options=run.opts.walk,
+    )
+    run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
+    return {
+        p.name: _added_estimate(
+            prof.fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise,
+            run.opts.ci_confidence,
+        ).to_dict()
+        for p in tie.candidate.parameters
+    }  # fmt: skip
 
 
 def _recheck_base(run: _Run, fit: FitResult, best: CandidateFit) -> FitResult | None:
@@ -296,7 +319,7 @@ def diagnose_problem(
     prof = profile_problem(
         aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk
     )
-    run.extra += prof.cost.simulations - final_fit.cost.simulations
+    run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
     estimates = {
         p.name: _added_estimate(
@@ -310,10 +333,11 @@ def diagnose_problem(
     if opts.absorbed:
         at_study = augmented(problem, applied, problem.spec.confidence)
         absorbed_by, sims = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
-        run.extra += sims
+        run.profiled(at_study, sims)
         run.report("profiles of the original parameters before and after")
     rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
     ties = decide.ties(best, rivals) if len(applied) == 1 else []
+    tied = [{**t.to_dict(), "intervals": _tie_intervals(run, t.fit)} for t in ties]
     lrt = float(stats.chi2.sf(max(fit.chi2 - final_fit.chi2, 0.0), len(added)))
     concealed = not rt.holm(tests_before, opts.alpha)
     return Diagnosis(
@@ -324,6 +348,6 @@ def diagnose_problem(
         candidates=tuple(scores), added_parameters=estimates, chi2_after=final_fit.chi2,
         lrt_p_value=lrt, bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
         parameters_after=dict(final_fit.estimates), second_effect=second,
-        indistinguishable=tuple(t.to_dict() for t in ties), absorbed=absorbed_by,
+        indistinguishable=tuple(tied), absorbed=absorbed_by,
         cost=run.cost(), **common,
     )  # fmt: skip
