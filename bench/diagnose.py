@@ -126,23 +126,25 @@ def make_case(task: Task, cache: Path | None) -> tuple[ft.Case, dict[str, Any]]:
 
 
 def run_task(task: Task, cache: Path | None, generate_only: bool) -> dict[str, Any]:
-    """Generate one case and (unless ``generate_only``) diagnose it."""
+    """Generate one case and (unless ``generate_only``) diagnose it; failures become a row."""
     kind, effect, seed, level = task
+    row: dict[str, Any] = {"kind": kind, "effect": effect or "control", "seed": seed}
+    row["level"] = level
     t0 = time.perf_counter()
-    case, info = make_case(task, cache)
-    row: dict[str, Any] = {
-        "kind": kind,
-        "effect": effect or "control",
-        "seed": seed,
-        "level": level,
-        "truth": case.magnitude,
-        **info,
-        "generate_seconds": round(time.perf_counter() - t0, 1),
-    }
+    try:
+        case, info = make_case(task, cache)
+    except Exception as exc:  # a bench reports a case it cannot make and goes on
+        return {**row, "error": f"generation: {type(exc).__name__}: {exc}"}
+    row.update(truth=case.magnitude, **info)
+    row["generate_seconds"] = round(time.perf_counter() - t0, 1)
     if generate_only:
         return row
     t0 = time.perf_counter()
-    result = diagnose(builtin_fmu("tractor_implement"), case.experiments, study_spec()).to_dict()
+    try:
+        fmu = builtin_fmu("tractor_implement")
+        result = diagnose(fmu, case.experiments, study_spec()).to_dict()
+    except Exception as exc:  # an engine failure is a result of the bench, not its end
+        return {**row, "error": f"diagnose: {type(exc).__name__}: {exc}"}
     row.update(read_result(result, effect, case))
     row["seconds"] = round(time.perf_counter() - t0, 1)
     return row
@@ -198,7 +200,10 @@ def main() -> None:
 
 def report(rows: list[dict[str, Any]]) -> None:
     """Print the false-alarm summary and the confusion tables present in ``rows``."""
-    print_false_alarm([r for r in rows if r["kind"] == "false_alarm"])
+    for r in rows:
+        if "error" in r:
+            print(f"FAILED: {r['kind']} {r['effect']} seed {r['seed']}: {r['error']}")
+    print_false_alarm([r for r in rows if r["kind"] == "false_alarm" and "named" in r])
     print_tables([r for r in rows if r["kind"] != "false_alarm" and "named" in r])
 
 
