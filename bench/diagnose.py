@@ -8,7 +8,8 @@ p in [1e-12, 1e-3]. Controls are drawn the same way without an effect. Only the 
 ``diagnose`` is read.
 
     python bench/diagnose.py [--seeds 8] [--controls 30] [--effects sensor_lag,...]
-        [--cache DIR] [--jobs N] [--shard K/N] [--log F] [--generate-only] [--easy]
+        [--cache DIR] [--jobs N] [--shard K/N] [--log F] [--generate-only]
+        [--easy [--easy-seeds 2]]
     python bench/diagnose.py --false-alarm 200 [--cache DIR] [--jobs N] [--shard K/N] [--log F]
     python bench/diagnose.py --table F [F ...]      # the tables of logged runs (merged shards)
 
@@ -67,8 +68,8 @@ def tasks(args: argparse.Namespace) -> list[Task]:
     out: list[Task] = [("control", None, s0 + s, 0) for s in range(args.controls)]
     effects = args.effects.split(",")
     out += [("concealed", e, s0 + s, 0) for s in range(args.seeds) for e in effects]
-    if args.easy:
-        out += [("easy", e, s0 + s, lv) for e in effects for lv in (0, 1) for s in range(2)]
+    easy = range(s0, s0 + args.easy_seeds if args.easy else s0)
+    out += [("easy", e, s, lv) for e in effects for lv in (0, 1) for s in easy]
     return out
 
 
@@ -172,6 +173,7 @@ def main() -> None:
     parser.add_argument("--controls", type=int, default=30)
     parser.add_argument("--effects", default=",".join(ft.EFFECTS))
     parser.add_argument("--easy", action="store_true", help="also today's fixed magnitudes")
+    parser.add_argument("--easy-seeds", type=int, default=2, help="easy cases per magnitude")
     parser.add_argument("--false-alarm", type=int, default=0, metavar="N", help="N controls only")
     parser.add_argument("--cache", type=Path, default=None, help="folder of generated cases")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes")

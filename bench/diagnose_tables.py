@@ -47,6 +47,12 @@ def print_tables(rows: list[dict[str, Any]]) -> None:
         print("\nCONCEALED cases (the base fit hides the effect) and controls")
         confusion(concealed)
         summary(concealed)
+    for r in concealed:
+        if r["named"] == "none" and r["effect"] != "control":
+            print(
+                f"missed: {r['effect']} seed {r['seed']} (magnitude {r['truth']:.4g}): noise-free "
+                f"lambda {r['lambda']}, LRT p of the true augmentation {r['lrt_p']}"
+            )
     for r in visible:
         print(
             f"not concealed (kept out of the table): {r['effect']} seed {r['seed']} "
