@@ -118,8 +118,8 @@ def make_case(task: Task, cache: Path | None) -> tuple[ft.Case, dict[str, Any]]:
             "target_lambda": round(made.target_lambda, 1),
             "lambda": round(made.achieved_lambda, 1),
             "lrt_p": check.get("lrt_p"),
-            "reduced_chi2": round(float(check["reduced_chi2"]), 3),  # type: ignore[arg-type]
-            "min_ljung_box_p": round(min(check["ljung_box"].values()), 3),  # type: ignore[union-attr]
+            "reduced_chi2": round(float(check["reduced_chi2"]), 3),
+            "min_ljung_box_p": round(min(check["ljung_box"].values()), 3),
             "attempts": made.attempts,
             "failures": check["failures"],
         }

@@ -24,6 +24,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -40,7 +41,7 @@ MAX_SEARCH = 10
 """Base fits spent on the magnitude search."""
 TOLERANCE = 1.1
 """The search stops when lambda is within this factor of the target."""
-CODE = {None: 0, **{e: i + 1 for i, e in enumerate(ft.EFFECTS)}}
+CODE: dict[str | None, int] = {None: 0, **{e: i + 1 for i, e in enumerate(ft.EFFECTS)}}
 """Per-effect stream of the random draws (``None``: controls)."""
 FIRST_STRENGTH = {
     "sensor_lag": 0.05, "input_delay": 0.05, "steering_lag": 0.05, "steer_offset": 0.001,
@@ -105,7 +106,7 @@ class ConcealedCase:
     target_lambda: float = 0.0
     achieved_lambda: float = 0.0
     attempts: int = 0
-    check: dict[str, object] = field(default_factory=dict)
+    check: dict[str, Any] = field(default_factory=dict)
     concealed: bool = False
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -258,7 +259,7 @@ class Check:
             out.append(f"lrt p={p:.3g} outside {P_RANGE}")
         return out
 
-    def to_dict(self) -> dict[str, object]:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
         return {
             "chi2_base": self.chi2_base, "n_data": self.n_data, "n_free": self.n_free,
