@@ -30,7 +30,7 @@ import numpy as np
 
 import fieldtruth as ft
 from fmuid.data import Experiment, load_experiment
-from operational import Check, base_fit, check_case
+from operational import base_fit, check_case
 
 VERSION = 1
 """Bumped when the generator changes; cached cases of another version are made again."""
@@ -204,22 +204,24 @@ def calibrate(design: Design) -> tuple[float, float, dict[str, float]]:
 
 
 def concealed_case(effect: str, seed: int) -> ConcealedCase:
-    """Make one concealed case of ``effect`` (see the module docstring)."""
+    """Make one concealed case of ``effect`` (see the module docstring).
+
+    The kept draw's ``check`` lists under ``rejected`` why the earlier noise draws failed.
+    """
     design = draw_design(effect, seed)
     magnitude, lam, estimates = calibrate(design)
-    check: Check | None = None
-    attempt = 0
+    rejected: list[list[str]] = []
     for attempt in range(1, ATTEMPTS + 1):
         experiments = recordings(design, magnitude, (seed, CODE[effect], VERSION, attempt))
         starts = [estimates, tires(design.truth)]
         check = check_case(experiments, effect, magnitude, starts, design.bias_output)
-        if not check.failures():
+        failures = check.failures()
+        if not failures or attempt == ATTEMPTS:
             break
-    assert check is not None
+        rejected.append(failures)
     case = make_ft_case(design, magnitude, experiments)
-    return ConcealedCase(
-        case, seed, design.target_lambda, lam, attempt, check.to_dict(), not check.failures()
-    )
+    summary = {**check.to_dict(), "rejected": rejected}
+    return ConcealedCase(case, seed, design.target_lambda, lam, attempt, summary, not failures)
 
 
 def control_case(seed: int) -> ConcealedCase:
