@@ -35,7 +35,7 @@ from operational import base_fit, check_case
 VERSION = 1
 """Bumped when the generator changes; cached cases of another version are made again."""
 LAMBDA_RANGE = (15.0, 45.0)
-ATTEMPTS = 6
+ATTEMPTS = 10
 """Noise draws tried per case before it is reported as not concealable."""
 MAX_SEARCH = 10
 """Base fits spent on the magnitude search."""
