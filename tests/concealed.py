@@ -1,9 +1,11 @@
 """Concealed field-truth cases: each effect sized per case so that the base fit hides it.
 
 A case is drawn as in :func:`fieldtruth.make_case` (tire parameters log-normal 25 % off nominal,
-SNR 25-100 per experiment, 5 or 10 Hz, a step steer and a chirp) plus a target noncentrality
-``lambda`` (log-uniform in :data:`LAMBDA_RANGE`). The effect's magnitude is found by a
-safeguarded secant search (bisection when the secant leaves the bracket) in log-log space on
+SNR 25-100 per experiment, 5 or 10 Hz, a step steer and a chirp; the noise sigma is
+``max|gam_t| / SNR`` of the motion without the effect, so that it does not move with the
+magnitude) plus a target noncentrality ``lambda`` (log-uniform in :data:`LAMBDA_RANGE`). The
+effect's magnitude is found by a safeguarded secant search (bisection when the secant leaves
+the bracket) in log-log space on
 
     lambda(m) = min chi2 of the BASE model fitted to the noise-free data with the effect,
 
