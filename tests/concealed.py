@@ -1,11 +1,11 @@
 """Concealed field-truth cases: each effect sized per case so that the base fit hides it.
 
 A case is drawn as in :func:`fieldtruth.make_case` (tire parameters log-normal 25 % off nominal,
-SNR 25-100 per experiment, 5 or 10 Hz, a step steer and a chirp; the noise sigma is
-``max|gam_t| / SNR`` of the motion without the effect, so that it does not move with the
-magnitude) plus a target noncentrality ``lambda`` (log-uniform in :data:`LAMBDA_RANGE`). The
-effect's magnitude is found by a safeguarded secant search (bisection when the secant leaves
-the bracket) in log-log space on
+drawn again when within a factor 2 of the lower or 1.25 of the upper bound; SNR 25-100 per
+experiment, 5 or 10 Hz, a step steer and a chirp; the noise sigma is ``max|gam_t| / SNR`` of
+the motion without the effect, so that it does not move with the magnitude) plus a target
+noncentrality ``lambda`` (log-uniform in :data:`LAMBDA_RANGE`). The effect's magnitude is found
+by a safeguarded secant search (bisection when the secant leaves the bracket) in log-log space on
 
     lambda(m) = min chi2 of the BASE model fitted to the noise-free data with the effect,
 
@@ -34,7 +34,7 @@ import fieldtruth as ft
 from fmuid.data import Experiment, load_experiment
 from operational import base_fit, check_case
 
-VERSION = 1
+VERSION = 2
 """Bumped when the generator changes; cached cases of another version are made again."""
 LAMBDA_RANGE = (15.0, 45.0)
 ATTEMPTS = 10
@@ -124,7 +124,10 @@ def draw_design(effect: str | None, seed: int) -> Design:
     rng = np.random.default_rng([seed, CODE[effect], VERSION])
     truth = dict(ft.NOMINAL)
     for name, (lo, hi) in ft.BOUNDS.items():
-        truth[name] = float(np.clip(ft.NOMINAL[name] * np.exp(rng.normal(0, 0.25)), lo * 2, hi / 2))
+        value = 0.0
+        while not 2 * lo <= value <= hi / 1.25:  # make_case's clip at hi / 2 pins C_atr
+            value = ft.NOMINAL[name] * float(np.exp(rng.normal(0, 0.25)))
+        truth[name] = value
     rate = float(rng.choice([5.0, 10.0]))
     bias_output = str(rng.choice(["gam_t", "gam_i"]))
     sign = float(rng.choice([-1.0, 1.0]))
