@@ -278,18 +278,48 @@ def make_case(
         if effect == "gyro_bias":
             bias_value = magnitude * sigma if not bias_value else bias_value
             y[bias_output] = y[bias_output] + bias_value
-        rows = np.union1d(t_in, t_out)
-        out_rows = np.isin(rows, t_out)
-        columns = {"delta": np.interp(rows, t_in, u_in)}
-        columns["delta"][~np.isin(rows, t_in)] = np.nan
-        for output in ("gam_t", "gam_i"):
-            col = np.full(len(rows), np.nan)
-            col[out_rows] = y[output] + rng.normal(0.0, sigma, len(t_out))
-            columns[output] = col
-            sig = np.full(len(rows), np.nan)
-            sig[out_rows] = sigma
-            columns[f"sigma_{output}"] = sig
-        experiments.append(experiment_from_arrays(name, rows, columns))
+        noisy = {o: y[o] + rng.normal(0.0, sigma, len(t_out)) for o in ("gam_t", "gam_i")}
+        experiments.append(recording(name, t_in, u_in, t_out, noisy, sigma))
         snrs[name] = case_snr
     reported = bias_value if effect == "gyro_bias" else magnitude
     return Case(effect, reported, truth, experiments, bias_output, snrs)
+
+
+def recording(
+    name: str,
+    t_in: np.ndarray,
+    u_in: np.ndarray,
+    t_out: np.ndarray,
+    outputs: dict[str, np.ndarray],
+    sigma: float,
+) -> Experiment:
+    """Lay out one recording as the CSV files do: the union of input and output sample times.
+
+    Parameters
+    ----------
+    name
+        Experiment name (``step.csv``).
+    t_in, u_in
+        Steer samples: times [s] and angle [rad] (column ``delta``).
+    t_out, outputs
+        Output sample times [s] and the recorded ``gam_t``, ``gam_i`` [rad/s] there.
+    sigma
+        Noise standard deviation [rad/s], written per sample in ``sigma_<output>``.
+
+    Returns
+    -------
+    Experiment
+        Empty cells (NaN) where a row has no sample of a column.
+    """
+    rows = np.union1d(t_in, t_out)
+    out_rows = np.isin(rows, t_out)
+    columns = {"delta": np.interp(rows, t_in, u_in)}
+    columns["delta"][~np.isin(rows, t_in)] = np.nan
+    for output, values in outputs.items():
+        col = np.full(len(rows), np.nan)
+        col[out_rows] = values
+        columns[output] = col
+        sig = np.full(len(rows), np.nan)
+        sig[out_rows] = sigma
+        columns[f"sigma_{output}"] = sig
+    return experiment_from_arrays(name, rows, columns)
