@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import time
 
 import pytest
 from api_helpers import msd_spec
 
+import fieldtruth as ft
 import fmuid
 from fmuid.data import load_experiment, spec_from_json
+from fmuid.model.builtin import builtin_fmu
 
 pytestmark = pytest.mark.slow
 
@@ -115,3 +118,34 @@ def test_profile_on_dask_local_cluster_equals_local_pool(service_factory, step_c
         assert status["status"] == "done", status
         assert_same_intervals(client.result(job), direct_profile)
         assert "run_branch_anywhere" in cluster.scheduler.task_prefixes  # branches ran on dask
+
+
+@pytest.mark.slow
+def test_diagnose_job_names_a_concealed_offset_as_the_direct_call_does(service, tmp_path):
+    case = ft.make_case("steer_offset", 0.0004, seed=8, rate=5.0)
+    paths = case.write(tmp_path / "offset")
+    spec = {
+        "parameters": {
+            n: {"start": ft.NOMINAL[n], "lower": lo, "upper": hi}
+            for n, (lo, hi) in ft.BOUNDS.items()
+        },
+        "inputs": ["delta"],
+        "outputs": {"gam_t": {"sigma": "column"}, "gam_i": {"sigma": "column"}},
+        "global_search": False,
+    }
+    client = service.client()
+    job = client.submit("diagnose", spec, paths, model="tractor_implement")
+    status = client.wait(job, timeout=900)
+    assert status["status"] == "done", status
+    result = client.result(job)
+    direct = fmuid.diagnose(
+        builtin_fmu("tractor_implement"),
+        [load_experiment(p) for p in paths],
+        spec_from_json(json.dumps(spec)),
+    ).to_dict()
+    assert result["effect"] == direct["effect"] == "steer_offset"
+    assert result["verdict"] == direct["verdict"]
+    assert result["added_parameters"]["offset_steer"]["ci"] == pytest.approx(
+        direct["added_parameters"]["offset_steer"]["ci"], rel=1e-6
+    )
+    assert "Verdict" in client.report(job)

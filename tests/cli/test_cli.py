@@ -86,6 +86,26 @@ def test_fit_and_profile_write_contract_json(msd_fmu, tmp_path, capsys):
     assert all(p["status"] == "identifiable" for p in result["parameters"].values())
 
 
+def test_diagnose_writes_the_verdict_and_a_report(msd_fmu, tmp_path, capsys):
+    data = msd_csv(tmp_path / "step.csv", seed=3)
+    spec = write(tmp_path / "spec.json", json.dumps(SPEC))
+    out = tmp_path / "diagnosis.json"
+    code, stdout, err = run(
+        ["diagnose", "--fmu", msd_fmu, "--data", data, "--spec", spec, "--out", out,
+         "--report", tmp_path / "report"],
+        capsys,
+    )  # fmt: skip
+    assert code == 0, err
+    result = json.loads(out.read_text())
+    assert result["mismatch"] is False
+    assert result["verdict"] in stdout
+    # no annotation in the msd FMU: generic candidates named by its input and output
+    labels = {next(iter(c["parameters"])) for c in result["candidates"]}
+    assert labels == {"tau_sensor", "delay_f", "tau_f", "offset_f", "bias_x"}
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert "Verdict" in page and result["verdict"] in page
+
+
 @pytest.mark.parametrize(
     ("csv", "spec_change", "needle"),
     [
