@@ -186,6 +186,9 @@ def main() -> None:
         rows = [json.loads(line) for f in args.table for line in f.read_text().splitlines()]
         report(rows)
         return
+    unknown = set(args.effects.split(",")) - set(ft.EFFECTS)
+    if unknown:
+        parser.error(f"--effects: unknown {sorted(unknown)}; known: {', '.join(ft.EFFECTS)}")
     k, n = (int(x) for x in args.shard.split("/"))
     if not 0 <= k < n:
         parser.error(f"--shard {args.shard}: need 0 <= K < N")

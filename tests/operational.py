@@ -76,7 +76,8 @@ def base_fit(
 ) -> tuple[Problem, FitResult]:
     """Fit the base model (tires free) from each start; return the problem and the best fit."""
     problem = make_problem(builtin_fmu("tractor_implement"), experiments, study_spec())
-    fits = [fit_problem(problem, start=dict(s), global_search=False) for s in starts]
+    unique = {tuple(sorted(s.items())): dict(s) for s in starts}.values()
+    fits = [fit_problem(problem, start=s, global_search=False) for s in unique]
     return problem, min(fits, key=lambda f: f.chi2)
 
 
