@@ -83,9 +83,11 @@ def read_result(d: dict[str, Any], effect: str | None, case: ft.Case) -> dict[st
     named = d["effect"] if d["mismatch"] else "none"
     ties = tie_names(d.get("indistinguishable"))
     name = PARAMETER.get(effect or "", f"bias_{case.bias_output}")
-    if effect in ties and named in PARAMETER:
-        name = PARAMETER[named]  # an equivalent model names the same magnitude
     added = (d.get("added_parameters") or {}).get(name)
+    for tie in d.get("indistinguishable") or []:
+        intervals = tie.get("intervals", {}) if isinstance(tie, dict) else {}
+        if intervals and tie["effect"] == effect and name in intervals:
+            added = intervals[name]  # the truth listed as equally good, with its interval
     contains = None
     if effect in CATALOGUE:
         contains = False

@@ -8,7 +8,6 @@ by that criterion alone (the seed fixes truth, noise and design).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -17,32 +16,16 @@ import pytest
 from scipy import stats
 
 import fieldtruth as ft
-from fmuid.data import Spec, spec_from_json
 from fmuid.diagnose import DiagnoseOptions, diagnose
 from fmuid.diagnose.plots import figures
 from fmuid.stages import make_problem
+from operational import study_spec
 
 CONTRACT = {
     "mismatch", "evidence", "location", "effect", "description", "candidates",
     "added_parameters", "chi2_before", "chi2_after", "parameters", "indistinguishable",
     "generic_correction", "absorbed",
 }  # fmt: skip
-
-
-def _spec() -> Spec:
-    return spec_from_json(
-        json.dumps(
-            {
-                "parameters": {
-                    n: {"start": ft.NOMINAL[n], "lower": lo, "upper": hi}
-                    for n, (lo, hi) in ft.BOUNDS.items()
-                },
-                "inputs": ["delta"],
-                "outputs": {"gam_t": {"sigma": "column"}, "gam_i": {"sigma": "column"}},
-                "global_search": False,
-            }
-        )
-    )
 
 
 def _ljung_box_p(r: np.ndarray) -> float:
@@ -55,7 +38,7 @@ def _ljung_box_p(r: np.ndarray) -> float:
 
 
 def _assert_concealed(fmu: Path, case: ft.Case, result: dict[str, Any]) -> None:
-    problem = make_problem(fmu, case.experiments, _spec())
+    problem = make_problem(fmu, case.experiments, study_spec())
     before = {n: result["parameters"][n]["before"] for n in ft.BOUNDS}
     predictions = problem.predict(before)
     for i, exp in enumerate(case.experiments):
@@ -72,7 +55,7 @@ def _assert_concealed(fmu: Path, case: ft.Case, result: dict[str, Any]) -> None:
 
 def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
     case = ft.make_case(None, seed=11, rate=5.0)
-    result = diagnose(tractor_fmu, case.experiments, _spec()).to_dict()
+    result = diagnose(tractor_fmu, case.experiments, study_spec()).to_dict()
     assert result["mismatch"] is False
     assert result["effect"] is None
     assert result["evidence"] == []
@@ -102,7 +85,7 @@ def test_concealed_effect_is_found_named_and_sized(
     tractor_fmu: Path, effect: str, parameter: str, magnitude: float, seed: int
 ) -> None:
     case = ft.make_case(effect, magnitude, seed=seed, rate=5.0)
-    diagnosis = diagnose(tractor_fmu, case.experiments, _spec())
+    diagnosis = diagnose(tractor_fmu, case.experiments, study_spec())
     result = diagnosis.to_dict()
     _assert_concealed(tractor_fmu, case, result)
     assert result["mismatch"] is True
@@ -124,7 +107,7 @@ def test_concealed_effect_is_found_named_and_sized(
         assert entry["before"]["status"] and entry["after"]["status"]
         lo_b, hi_b = entry["before"]["ci"]
         assert lo_b is None or lo_b <= entry["before"]["estimate"] <= (hi_b or np.inf)
-    figs = figures(diagnosis, make_problem(tractor_fmu, case.experiments, _spec()))
+    figs = figures(diagnosis, make_problem(tractor_fmu, case.experiments, study_spec()))
     assert set(figs) == {"fit", "residuals", "spectrum"}
 
 
@@ -133,7 +116,7 @@ def test_a_steering_lag_and_the_same_lag_on_both_outputs_are_listed_as_a_tie(
     tractor_fmu: Path,
 ) -> None:
     case = ft.make_case("steering_lag", 0.05, seed=6, rate=5.0)
-    result = diagnose(tractor_fmu, case.experiments, _spec(), options=DiagnoseOptions(
+    result = diagnose(tractor_fmu, case.experiments, study_spec(), options=DiagnoseOptions(
         absorbed=False)).to_dict()  # fmt: skip
     pair = {"steering_lag", "sensor_lag"}
     assert result["effect"] in pair
