@@ -335,6 +335,10 @@ def diagnose_problem(
         absorbed_by, sims = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
         run.profiled(at_study, sims)
         run.report("profiles of the original parameters before and after")
+    common["location"] = locate.effect_location(
+        locate.residual_series(problem, fit.estimates),
+        locate.residual_series(aug, final_fit.estimates),
+    )
     rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
     ties = decide.ties(best, rivals) if len(applied) == 1 else []
     tied = [{**t.to_dict(), "intervals": _tie_intervals(run, t.fit)} for t in ties]
