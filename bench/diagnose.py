@@ -9,7 +9,7 @@ p in [1e-12, 1e-3]. Controls are drawn the same way without an effect. Only the 
 
     python bench/diagnose.py [--seeds 8] [--controls 30] [--effects sensor_lag,...]
         [--cache DIR] [--jobs N] [--shard K/N] [--log F] [--generate-only]
-        [--easy [--easy-seeds 2]]
+        [--easy [--easy-seeds 2]] [--no-absorbed] [--skip-done LOG]
     python bench/diagnose.py --false-alarm 200 [--cache DIR] [--jobs N] [--shard K/N] [--log F]
     python bench/diagnose.py --table F [F ...]      # the tables of logged runs (merged shards)
 
@@ -40,7 +40,7 @@ sys.path.insert(0, str(ROOT / "service"))
 import concealed as cc  # noqa: E402
 import fieldtruth as ft  # noqa: E402
 from diagnose_tables import CATALOGUE, print_false_alarm, print_tables  # noqa: E402
-from fmuid.diagnose import diagnose  # noqa: E402
+from fmuid.diagnose import DiagnoseOptions, diagnose  # noqa: E402
 from fmuid.model.builtin import builtin_fmu  # noqa: E402
 from operational import study_spec  # noqa: E402
 
@@ -128,7 +128,9 @@ def make_case(task: Task, cache: Path | None) -> tuple[ft.Case, dict[str, Any]]:
     return made.case, info
 
 
-def run_task(task: Task, cache: Path | None, generate_only: bool) -> dict[str, Any]:
+def run_task(
+    task: Task, cache: Path | None, generate_only: bool, absorbed: bool = True
+) -> dict[str, Any]:
     """Generate one case and (unless ``generate_only``) diagnose it; failures become a row."""
     kind, effect, seed, level = task
     row: dict[str, Any] = {"kind": kind, "effect": effect or "control", "seed": seed}
@@ -145,7 +147,8 @@ def run_task(task: Task, cache: Path | None, generate_only: bool) -> dict[str, A
     t0 = time.perf_counter()
     try:
         fmu = builtin_fmu("tractor_implement")
-        result = diagnose(fmu, case.experiments, study_spec()).to_dict()
+        options = DiagnoseOptions(absorbed=absorbed)
+        result = diagnose(fmu, case.experiments, study_spec(), options=options).to_dict()
     except Exception as exc:  # an engine failure is a result of the bench, not its end
         return {**row, "error": f"diagnose: {type(exc).__name__}: {exc}"}
     row.update(read_result(result, effect, case))
@@ -157,10 +160,13 @@ def run(selected: list[Task], args: argparse.Namespace) -> Iterator[dict[str, An
     """Run the tasks, in this process or in ``args.jobs`` worker processes."""
     if args.jobs <= 1:
         for task in selected:
-            yield run_task(task, args.cache, args.generate_only)
+            yield run_task(task, args.cache, args.generate_only, not args.no_absorbed)
         return
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        futures = [pool.submit(run_task, t, args.cache, args.generate_only) for t in selected]
+        futures = [
+            pool.submit(run_task, t, args.cache, args.generate_only, not args.no_absorbed)
+            for t in selected
+        ]
         for future in as_completed(futures):
             yield future.result()
 
@@ -183,6 +189,13 @@ def main() -> None:
     parser.add_argument("--generate-only", action="store_true", help="fill the cache only")
     parser.add_argument("--log", type=Path, default=None, help="append JSON lines here")
     parser.add_argument("--table", type=Path, nargs="+", help="print the tables of logs")
+    parser.add_argument(
+        "--no-absorbed", action="store_true",
+        help="skip the re-profiles of the original parameters (they do not enter the tables)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--skip-done", type=Path, default=None, help="skip the cases already diagnosed in this log"
+    )
     args = parser.parse_args()
     if args.table:
         rows = [json.loads(line) for f in args.table for line in f.read_text().splitlines()]
@@ -194,8 +207,13 @@ def main() -> None:
     k, n = (int(x) for x in args.shard.split("/"))
     if not 0 <= k < n:
         parser.error(f"--shard {args.shard}: need 0 <= K < N")
+    selected = tasks(args)[k::n]
+    if args.skip_done and args.skip_done.exists():
+        rows_done = [json.loads(line) for line in args.skip_done.read_text().splitlines()]
+        done = {(r["kind"], r["seed"], r["level"], r["effect"]) for r in rows_done if "named" in r}
+        selected = [t for t in selected if (t[0], t[2], t[3], t[1] or "control") not in done]
     rows = []
-    for row in run(tasks(args)[k::n], args):
+    for row in run(selected, args):
         rows.append(row)
         print(json.dumps(row), flush=True)
         if args.log:
