@@ -1,4 +1,5 @@
-"""A loaded FMU: checks it is FMI 2.0 co-simulation for linux64 and lists its variables."""
+"""A loaded FMU: checks that it can be run here (FMI 2.0 or 3.0, co-simulation or model exchange,
+a linux x86-64 binary) and lists its variables with their FMI types."""
 
 from __future__ import annotations
 
@@ -17,10 +18,20 @@ from fmuid.errors import FmuError
 
 logger = logging.getLogger(__name__)
 
+CO_SIMULATION = "CoSimulation"
+MODEL_EXCHANGE = "ModelExchange"
+
+FLOAT_TYPES = frozenset({"Real", "Float64", "Float32"})
+INTEGER_TYPES = frozenset(
+    {"Integer", "Enumeration", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64",
+     "UInt64"}
+)  # fmt: skip
+BINARY_DIR = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
+
 
 @dataclass(frozen=True)
 class Variable:
-    """One real scalar variable of an FMU, with its FMI names.
+    """One scalar variable of an FMU, with its FMI names.
 
     Attributes
     ----------
@@ -31,13 +42,18 @@ class Variable:
     causality
         ``parameter``, ``input``, ``output``, ...
     variability
-        ``tunable``, ``fixed``, ``continuous``, ...
+        ``tunable``, ``fixed``, ``continuous``, ``discrete``, ...
     start
-        Start value, or None when the FMU gives none.
+        Start value of a numeric variable (Boolean as 0/1), or None.
     unit
         Unit name, or None.
     description
         Free text (may be empty).
+    type
+        FMI type name: ``Real``, ``Integer``, ``Boolean``, ``String``, ``Enumeration`` (FMI 2.0)
+        or ``Float64``, ``Int32``, ``Binary``, ``Clock``, ... (FMI 3.0).
+    shape
+        Array dimensions (FMI 3.0); empty for a scalar.
 
     """
 
@@ -48,6 +64,30 @@ class Variable:
     start: float | None
     unit: str | None
     description: str
+    type: str = "Real"
+    shape: tuple[int, ...] = ()
+
+    @property
+    def kind(self) -> str:
+        """``float``, ``integer`` (also Enumeration), ``boolean``, ``string`` or ``unusable``."""
+        if self.shape:
+            return "unusable"
+        if self.type in FLOAT_TYPES:
+            return "float"
+        if self.type in INTEGER_TYPES:
+            return "integer"
+        return {"Boolean": "boolean", "String": "string"}.get(self.type, "unusable")
+
+    @property
+    def is_continuous(self) -> bool:
+        """Whether an input is linear between samples (a float that is not ``discrete``)."""
+        return self.kind == "float" and self.variability != "discrete"
+
+    @property
+    def type_label(self) -> str:
+        """The FMI type as a user reads it, e.g. ``Int32`` or ``Float64[3]`` for an array."""
+        dims = f"[{', '.join(map(str, self.shape))}]" if self.shape else ""
+        return f"{self.type}{dims}"
 
 
 def _check_archive(path: Path) -> set[str]:
@@ -77,25 +117,48 @@ def _fmi_version(path: Path, names: set[str]) -> str:
             root = ET.fromstring(archive.read("modelDescription.xml"))
     except ET.ParseError as exc:
         raise FmuError(f"{path}: modelDescription.xml is not valid XML: {exc}") from exc
-    return root.get("fmiVersion", "unknown")
+    version = root.get("fmiVersion", "unknown")
+    return "3.0" if version.startswith("3.") else version
 
 
-def _start(value: object) -> float | None:
-    if value is None:
+def _start(value: object, type_name: str) -> float | None:
+    if value is None or type_name in ("String", "Binary", "Clock"):
         return None
+    text = str(value).strip()
+    if type_name == "Boolean":
+        return 1.0 if text.lower() in ("true", "1") else 0.0
     try:
-        return float(str(value))
+        return float(text)
     except ValueError:
         return None
 
 
+def _variable(v: fmpy.model_description.ModelVariable) -> Variable:
+    unit = v.unit if v.unit else (getattr(v.declaredType, "unit", None) if v.declaredType else None)
+    shape = tuple(int(d.start) if d.start is not None else 0 for d in v.dimensions)
+    return Variable(
+        name=v.name,
+        value_reference=int(v.valueReference),
+        causality=v.causality,
+        variability=v.variability or "continuous",
+        start=_start(v.start, v.type),
+        unit=unit or None,
+        description=v.description or "",
+        type=v.type,
+        shape=shape,
+    )
+
+
 class FmuModel:
-    """An FMI 2.0 co-simulation FMU with a linux64 binary.
+    """An FMI 2.0 or 3.0 FMU (co-simulation or model exchange) with a linux x86-64 binary.
 
     Parameters
     ----------
     path
         The ``.fmu`` file.
+    interface
+        ``"CoSimulation"`` or ``"ModelExchange"``; default: co-simulation when the FMU has it
+        (its own solver, as its exporter tuned it), else model exchange.
 
     Attributes
     ----------
@@ -104,70 +167,101 @@ class FmuModel:
     sha256
         SHA-256 hex digest of the file.
     model_name, fmi_version, guid, model_identifier
-        From ``modelDescription.xml``.
+        From ``modelDescription.xml`` (``guid`` is the FMI 3.0 ``instantiationToken``).
+    interface
+        The FMI interface fmuid drives: ``CoSimulation`` or ``ModelExchange``.
     model_description
         fmpy's parsed model description.
     parameters, inputs, outputs
-        Real variables by name, in file order.
+        Variables of every type by name, in file order (see :attr:`Variable.kind` for which
+        types fmuid can use where).
 
     Raises
     ------
     FmuError
         If the file is not a zip archive, has entries escaping the extraction directory, is not
-        FMI 2.0, has no co-simulation interface or no ``binaries/linux64/<id>.so``.
+        FMI 2.0 or 3.0, lacks the requested interface or has no linux x86-64 binary.
 
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, interface: str | None = None) -> None:
         self.path = Path(path)
         names = _check_archive(self.path)
         self.sha256 = hashlib.sha256(self.path.read_bytes()).hexdigest()
         version = _fmi_version(self.path, names)
-        if version != "2.0":
-            raise FmuError(f"{self.path}: FMI version {version} is not supported (only 2.0)")
+        if version not in BINARY_DIR:
+            raise FmuError(
+                f"{self.path}: FMI version {version} is not supported (only 2.0 and 3.0)"
+            )
         try:
             description = fmpy.read_model_description(str(self.path))
         except Exception as exc:  # fmpy raises bare Exception, lxml and KeyError subclasses
             raise FmuError(f"{self.path}: cannot read modelDescription.xml: {exc}") from exc
-        if description.coSimulation is None:
-            raise FmuError(f"{self.path}: the FMU has no co-simulation interface")
         self.model_description: ModelDescription = description
+        self.interface = _choose_interface(self.path, description, interface)
         self.model_name: str = description.modelName
-        self.fmi_version: str = description.fmiVersion
-        self.guid: str = description.guid
-        self.model_identifier: str = description.coSimulation.modelIdentifier
-        binary = f"binaries/linux64/{self.model_identifier}.so"
+        self.fmi_version: str = version
+        self.guid: str = description.guid or description.instantiationToken or ""
+        kind = description.coSimulation if self.is_cosimulation else description.modelExchange
+        self.model_identifier: str = kind.modelIdentifier
+        binary = f"{BINARY_DIR[version]}/{self.model_identifier}.so"
         if binary not in names:
-            raise FmuError(f"{self.path}: the FMU has no linux64 binary ({binary} is missing)")
+            raise FmuError(
+                f"{self.path}: the FMU has no linux x86-64 binary ({binary} is missing; "
+                "source-code-only FMUs are not compiled by fmuid)"
+            )
         self.parameters: dict[str, Variable] = {}
         self.inputs: dict[str, Variable] = {}
         self.outputs: dict[str, Variable] = {}
-        groups = {"parameter": self.parameters, "input": self.inputs, "output": self.outputs}
+        groups = {
+            "parameter": self.parameters,
+            "structuralParameter": self.parameters,
+            "input": self.inputs,
+            "output": self.outputs,
+        }
         for v in description.modelVariables:
             group = groups.get(v.causality)
-            if group is None:
-                continue
-            if v.type != "Real":
-                logger.info(
-                    "%s: %s variable %s ignored (only Real is supported)", self.path, v.type, v.name
-                )
-                continue
-            unit = v.unit if v.unit else (v.declaredType.unit if v.declaredType else None)
-            group[v.name] = Variable(
-                name=v.name,
-                value_reference=int(v.valueReference),
-                causality=v.causality,
-                variability=v.variability,
-                start=_start(v.start),
-                unit=unit or None,
-                description=v.description or "",
-            )
+            if group is not None:
+                group[v.name] = _variable(v)
+
+    @property
+    def is_cosimulation(self) -> bool:
+        """Whether fmuid drives the FMU's co-simulation interface (else model exchange)."""
+        return self.interface == CO_SIMULATION
 
     @property
     def can_interpolate_inputs(self) -> bool:
-        """Whether the FMU accepts first-order input derivatives (``canInterpolateInputs``)."""
-        return bool(self.model_description.coSimulation.canInterpolateInputs)
+        """Whether the FMU accepts first-order input derivatives (FMI 2.0 co-simulation)."""
+        cs = self.model_description.coSimulation
+        return self.is_cosimulation and self.fmi_version == "2.0" and bool(cs.canInterpolateInputs)
+
+    @property
+    def kind_label(self) -> str:
+        """E.g. ``FMI 3.0 model exchange``."""
+        name = "co-simulation" if self.is_cosimulation else "model exchange"
+        return f"FMI {self.fmi_version} {name}"
 
     def __repr__(self) -> str:
         """Name, file and checksum prefix."""
         return f"FmuModel({self.model_name!r}, path={str(self.path)!r}, sha256={self.sha256[:12]})"
+
+
+def _choose_interface(path: Path, description: ModelDescription, wanted: str | None) -> str:
+    available = [
+        name
+        for name, part in ((CO_SIMULATION, description.coSimulation),
+                           (MODEL_EXCHANGE, description.modelExchange))
+        if part is not None
+    ]  # fmt: skip
+    if wanted is not None and wanted not in (CO_SIMULATION, MODEL_EXCHANGE):
+        raise FmuError(f"unknown FMI interface {wanted!r}: use CoSimulation or ModelExchange")
+    if not available:
+        raise FmuError(
+            f"{path}: the FMU has neither a co-simulation nor a model-exchange interface "
+            "(scheduled execution is not supported)"
+        )
+    if wanted is None:
+        return available[0]
+    if wanted not in available:
+        raise FmuError(f"{path}: the FMU has no {wanted} interface (it has {available[0]})")
+    return wanted

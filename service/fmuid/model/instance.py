@@ -1,0 +1,373 @@
+"""One FMI instance (FMI 2.0 or 3.0, co-simulation or model exchange): typed get/set, the
+life-cycle calls the masters need, and :class:`FmuError` naming the FMI function and status.
+
+fmpy loads the binary and declares the C signatures; the calls themselves go straight to the
+library (``fmu._functions``) so that a failed call gives its status instead of an exception.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import os
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import fmpy
+import numpy as np
+from fmpy.fmi2 import (
+    FMU2Model,
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+    fmi2EventInfo,
+)
+from fmpy.fmi3 import FMU3Model, FMU3Slave
+
+from fmuid.errors import FmuError
+from fmuid.model.fmu import FmuModel, Variable
+
+logger = logging.getLogger(__name__)
+
+_SUFFIX = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
+_C_INT = ctypes.c_int
+_FMI2_TYPES: dict[str, tuple[str, Any]] = {
+    "Real": ("Real", ctypes.c_double), "Integer": ("Integer", _C_INT),
+    "Enumeration": ("Integer", _C_INT), "Boolean": ("Boolean", _C_INT),
+    "String": ("String", ctypes.c_char_p),
+}  # fmt: skip
+_FMI3_TYPES: dict[str, tuple[str, Any]] = {
+    "Float64": ("Float64", ctypes.c_double), "Float32": ("Float32", ctypes.c_float),
+    "Int8": ("Int8", ctypes.c_int8), "UInt8": ("UInt8", ctypes.c_uint8),
+    "Int16": ("Int16", ctypes.c_int16), "UInt16": ("UInt16", ctypes.c_uint16),
+    "Int32": ("Int32", ctypes.c_int32), "UInt32": ("UInt32", ctypes.c_uint32),
+    "Int64": ("Int64", ctypes.c_int64), "UInt64": ("UInt64", ctypes.c_uint64),
+    "Enumeration": ("Int64", ctypes.c_int64), "Boolean": ("Boolean", ctypes.c_bool),
+    "String": ("String", ctypes.c_char_p),
+}  # fmt: skip
+
+
+class Channels:
+    """Variables set or read together, grouped by their FMI get/set function.
+
+    Parameters
+    ----------
+    variables
+        The variables, in the order of the values passed to :meth:`Instance.set`.
+    version
+        ``"2.0"`` or ``"3.0"``.
+
+    """
+
+    def __init__(self, variables: Sequence[Variable], version: str) -> None:
+        table = _FMI2_TYPES if version == "2.0" else _FMI3_TYPES
+        prefix = "fmi2" if version == "2.0" else "fmi3"
+        groups: dict[str, list[int]] = {}
+        for i, v in enumerate(variables):
+            if v.type not in table or v.shape:
+                raise FmuError(f"variable {v.name!r} has type {v.type_label}, which fmuid cannot use")
+            groups.setdefault(table[v.type][0], []).append(i)
+        self.version = version
+        self.variables = list(variables)
+        self.size = len(variables)
+        self.groups: list[tuple[str, list[int], Any, Any]] = []
+        for suffix, index in groups.items():
+            ctype = table[variables[index[0]].type][1]
+            refs = (ctypes.c_uint * len(index))(*(variables[i].value_reference for i in index))
+            self.groups.append((suffix, index, refs, (ctype * len(index))()))
+        self.all_float = len(self.groups) == 1 and self.groups[0][0] in ("Real", "Float64")
+        self.refs = self.groups[0][2] if self.all_float else (ctypes.c_uint * 0)()
+        self.buffer = self.groups[0][3] if self.all_float else (ctypes.c_double * 0)()
+        self.view = np.ctypeslib.as_array(self.buffer) if self.size else np.empty(0)
+        self.values = np.empty(self.size)
+        self.setters = [f"{prefix}Set{group[0]}" for group in self.groups]
+        self.getters = [f"{prefix}Get{group[0]}" for group in self.groups]
+
+        self.continuous = [i for i, v in enumerate(variables) if v.is_continuous]
+        """Indices of the variables that are linear between samples (continuous floats)."""
+        self.helpers: dict[str, Any] = {}
+        """Per-channel-set objects the masters build once (buffers of derivatives, subsets)."""
+
+    def subset(self, index: Sequence[int]) -> Channels:
+        """The channels of the variables at ``index`` (made once, then cached)."""
+        key = "subset" + ",".join(map(str, index))
+        found = self.helpers.get(key)
+        if found is None:
+            found = self.helpers[key] = Channels([self.variables[i] for i in index], self.version)
+        return found
+
+
+def _to_c(variable: Variable, value: float | str) -> Any:
+    kind = variable.kind
+    if kind == "string":
+        if not isinstance(value, str):
+            raise FmuError(f"{variable.name!r} is a String; give it a text value, not {value!r}")
+        return value.encode()
+    if isinstance(value, str):
+        raise FmuError(f"{variable.name!r} is {variable.type_label}; got the text {value!r}")
+    number = float(value)
+    if kind == "float":
+        return number
+    if kind == "boolean" and number not in (0.0, 1.0):
+        raise FmuError(f"{variable.name!r} is Boolean; it takes 0 or 1 (false/true), not {value!r}")
+    if number != round(number):
+        raise FmuError(f"{variable.name!r} is {variable.type_label}; it takes whole numbers, not {value!r}")
+    return int(number)
+
+
+class Instance:
+    """One instance of an FMU's binary, driven through raw FMI calls.
+
+    Parameters
+    ----------
+    model
+        The parsed FMU (its ``interface`` says which class of fmpy loads it).
+    unzip_dir
+        Folder the FMU was extracted to.
+
+    """
+
+    def __init__(self, model: FmuModel, unzip_dir: str) -> None:
+        self.model = model
+        self.v3 = model.fmi_version == "3.0"
+        self.prefix = "fmi3" if self.v3 else "fmi2"
+        self.messages: list[str] = []
+        classes = {(False, True): FMU2Slave, (False, False): FMU2Model,
+                   (True, True): FMU3Slave, (True, False): FMU3Model}  # fmt: skip
+        cls = classes[(self.v3, model.is_cosimulation)]
+        cwd = os.getcwd()
+        try:
+            self.fmu: Any = cls(
+                guid=model.guid, unzipDirectory=unzip_dir,
+                modelIdentifier=model.model_identifier, instanceName=model.model_name,
+            )  # fmt: skip
+        except Exception as exc:  # fmpy raises bare Exception when the library does not load
+            raise FmuError(
+                f"FMU {model.path}: its binary for linux x86-64 does not load: {exc}",
+                function="dlopen",
+            ) from exc
+        finally:
+            os.chdir(cwd)  # fmpy changes into the binary's folder and may not change back
+        self.f: dict[str, Callable[..., Any]] = self.fmu._functions
+        self.component: Any = None
+        self.instantiations = 0
+        if not self.v3:
+            self._callbacks = fmi2CallbackFunctions()
+            self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log2)
+            self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+            self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+
+    def _log2(self, env: object, name: bytes, status: int, category: bytes, message: bytes) -> None:
+        self._log(status, message)
+
+    def _log3(self, env: object, status: int, category: bytes, message: bytes) -> None:
+        self._log(status, message)
+
+    def _log(self, status: int, message: bytes) -> None:
+        text = message.decode(errors="replace") if message else ""
+        self.messages.append(text)
+        del self.messages[:-20]
+        logger.debug("%s [%s]: %s", self.model.model_name, self.status_name(status), text)
+
+    def status_name(self, status: int) -> str:
+        """``fmi2Discard``, ``fmi3Error``, ... for a status code."""
+        return self.prefix + _SUFFIX[status] if 0 <= status < len(_SUFFIX) else str(status)
+
+    def fail(self, function: str, status: int, when: str) -> FmuError:
+        """The error for a failed FMI call, with the FMU's last message."""
+        last = self.messages[-1] if self.messages else "no message from the FMU"
+        name = self.status_name(status)
+        return FmuError(
+            f"FMU {self.model.model_name} ({self.model.path}): {function} returned {name} "
+            f"{when}: {last}",
+            function=function,
+            status=name,
+        )
+
+    def call(self, name: str, *args: Any, when: str = "") -> None:
+        """Call ``fmi2<name>``/``fmi3<name>`` on this instance; raise unless OK or Warning."""
+        function = self.prefix + name
+        status = self.f[function](self.component, *args)
+        if status > 1:
+            raise self.fail(function, status, when)
+
+    def instantiate(self) -> None:
+        """Create the instance (``fmi2Instantiate`` / ``fmi3Instantiate...``)."""
+        self.messages.clear()
+        try:
+            if self.v3 and self.model.is_cosimulation:
+                self.fmu.instantiate(logMessage=self._log3, eventModeUsed=False)
+            elif self.v3:
+                self.fmu.instantiate(logMessage=self._log3)
+            else:
+                self.fmu.instantiate(callbacks=self._callbacks)
+        except Exception as exc:  # fmpy raises bare Exception when instantiation returns NULL
+            last = self.messages[-1] if self.messages else "no message from the FMU"
+            raise FmuError(
+                f"FMU {self.model.path}: {self.prefix}Instantiate failed: {last}",
+                function=f"{self.prefix}Instantiate",
+                status=f"{self.prefix}Error",
+            ) from exc
+        self.component = self.fmu.component
+        self.instantiations += 1
+
+    def reset(self) -> bool:
+        """``fmi2Reset``/``fmi3Reset``; False when it fails (the caller instantiates again)."""
+        self.messages.clear()
+        return bool(self.f[self.prefix + "Reset"](self.component) <= 1)
+
+    def free(self) -> None:
+        """Free the instance (the library stays loaded)."""
+        if self.component is not None:
+            self.f[self.prefix + "FreeInstance"](self.component)
+            self.component = None
+
+    def unload(self) -> None:
+        """Free the instance and unload the library."""
+        self.free()
+        self.fmu.freeLibrary()
+
+    def set(self, channels: Channels, values: Sequence[float | str], t: float | None) -> None:
+        """Set the channels' variables to ``values`` (converted to their FMI types).
+
+        ``t`` is the time the values belong to (None for parameters), quoted on failure.
+        """
+        if channels.all_float:
+            channels.buffer[:] = values
+            self._transfer(channels.setters[0], channels.groups[0], t)
+            return
+        for setter, group in zip(channels.setters, channels.groups, strict=True):
+            group[3][:] = [_to_c(channels.variables[i], values[i]) for i in group[1]]
+            self._transfer(setter, group, t)
+
+    def read(self, channels: Channels, t: float) -> np.ndarray:
+        """The channels' variables at time ``t`` as numbers (Boolean as 0/1); valid until the
+        next read of the same channels."""
+        if channels.all_float:
+            self._transfer(channels.getters[0], channels.groups[0], t, read=True)
+            return channels.view
+        for getter, group in zip(channels.getters, channels.groups, strict=True):
+            self._transfer(getter, group, t, read=True)
+            channels.values[group[1]] = group[3][:]
+        return channels.values
+
+    def _transfer(
+        self, function: str, group: tuple[str, list[int], Any, Any], t: float | None,
+        read: bool = False,
+    ) -> None:  # fmt: skip
+        index, refs, array = group[1], group[2], group[3]
+        n = len(index)
+        if self.v3:
+            status = self.f[function](self.component, refs, n, array, n)
+        else:
+            status = self.f[function](self.component, refs, n, array)
+        if status > 1:
+            if read:
+                when = f"at t = {t} s"
+            else:
+                when = "while setting the parameters" if t is None else f"for the inputs at t = {t} s"
+            raise self.fail(function, status, when)
+
+    def writer(self, channels: Channels) -> Callable[[Sequence[float], float], None]:
+        """A fast :meth:`set` for the current instance (bound to its component)."""
+        if not channels.all_float:
+            return lambda values, t: self.set(channels, values, t)
+        function, buffer, n = channels.setters[0], channels.buffer, channels.size
+        args = (self.component, channels.refs, n, buffer) + ((n,) if self.v3 else ())
+        call = self.f[function]
+
+        def write(values: Sequence[float], t: float) -> None:
+            buffer[:] = values
+            if (status := call(*args)) > 1:
+                raise self.fail(function, status, f"for the inputs at t = {t} s")
+
+        return write
+
+    def reader(self, channels: Channels) -> Callable[[float], np.ndarray]:
+        """A fast :meth:`read` for the current instance (bound to its component)."""
+        if not channels.all_float:
+            return lambda t: self.read(channels, t)
+        function, view, n = channels.getters[0], channels.view, channels.size
+        args = (self.component, channels.refs, n, channels.buffer) + ((n,) if self.v3 else ())
+        call = self.f[function]
+
+        def read(t: float) -> np.ndarray:
+            if (status := call(*args)) > 1:
+                raise self.fail(function, status, f"at t = {t} s")
+            return view
+
+        return read
+
+    def stepper(self) -> Callable[[float, float], float | None]:
+        """A fast :meth:`do_step` for the current instance (bound to its component)."""
+        if self.v3:
+            return self.do_step
+        call, component = self.f["fmi2DoStep"], self.component
+
+        def step(t: float, h: float) -> float | None:
+            status = call(component, t, h, 1)
+            return None if status <= 1 else self._fmi2_outcome(status, t)
+
+        return step
+
+    def enter_initialization(self, t0: float, tolerance: float | None) -> None:
+        """Set up the experiment at ``t0`` and enter initialization mode."""
+        tol = (1, tolerance) if tolerance is not None else (0, 0.0)
+        when = f"at t = {t0} s"
+        if self.v3:
+            self.call("EnterInitializationMode", *tol, t0, 0, 0.0, when=when)
+        else:
+            self.call("SetupExperiment", *tol, t0, 0, 0.0, when=when)
+            self.call("EnterInitializationMode", when=when)
+
+    def update_discrete_states(self, t: float) -> tuple[bool, float | None]:
+        """Event iteration in event mode: (terminate requested, next time event or None)."""
+        when = f"at the event at t = {t} s"
+        while True:
+            if self.v3:
+                flags = [ctypes.c_bool() for _ in range(5)]
+                next_time = ctypes.c_double()
+                self.call("UpdateDiscreteStates", *map(ctypes.byref, flags),
+                          ctypes.byref(next_time), when=when)  # fmt: skip
+                again, terminate, defined = flags[0].value, flags[1].value, flags[4].value
+                t_next = next_time.value
+            else:
+                info = fmi2EventInfo()
+                self.call("NewDiscreteStates", ctypes.byref(info), when=when)
+                again, terminate = bool(info.newDiscreteStatesNeeded), bool(info.terminateSimulation)
+                defined, t_next = bool(info.nextEventTimeDefined), info.nextEventTime
+            if terminate or not again:
+                return terminate, t_next if defined else None
+
+    def do_step(self, t: float, h: float) -> float | None:
+        """One co-simulation step; None when it completed, else the time the FMU stopped at.
+
+        Raises
+        ------
+        FmuError
+            When the step fails and the FMU did not ask to terminate.
+
+        """
+        if not self.v3:
+            return self._fmi2_outcome(self.f["fmi2DoStep"](self.component, t, h, 1), t)
+        flags = [ctypes.c_bool() for _ in range(3)]
+        last = ctypes.c_double()
+        status = self.f["fmi3DoStep"](self.component, t, h, True,
+                                      *map(ctypes.byref, flags), ctypes.byref(last))  # fmt: skip
+        if status > 1:
+            raise self.fail("fmi3DoStep", status, f"in the step from t = {t} s")
+        return last.value if flags[1].value else None
+
+    def _fmi2_outcome(self, status: int, t: float) -> float | None:
+        """None after a completed ``fmi2DoStep``; the stop time after a terminating discard."""
+        if status <= 1:
+            return None
+        if status == 2:
+            terminated, when = ctypes.c_int(), ctypes.c_double(t)
+            self.f["fmi2GetBooleanStatus"](self.component, 3, ctypes.byref(terminated))
+            self.f["fmi2GetRealStatus"](self.component, 2, ctypes.byref(when))
+            if terminated.value:
+                return when.value
+        raise self.fail("fmi2DoStep", status, f"in the step from t = {t} s")
