@@ -70,7 +70,7 @@ class FitResult:
     sigma: dict[str, float]
     sigma_method: dict[str, str]
     jacobian: np.ndarray = field(repr=False)
-    fixed: dict[str, float] = field(default_factory=dict)
+    fixed: dict[str, float | str] = field(default_factory=dict)
     global_search: bool = True
     message: str = ""
     cost: Cost = Cost(0, 0.0)
@@ -123,7 +123,7 @@ class FitResult:
                 }
                 for n, s in zip(self.names, self.scales, strict=True)
             },
-            "fixed": {k: float(v) for k, v in self.fixed.items()},
+            "fixed": {k: v if isinstance(v, str) else float(v) for k, v in self.fixed.items()},
             "global_search": self.global_search,
             "message": self.message,
             "cost": self.cost.to_dict(),

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+from typing import Any
 
 import numpy as np
 
@@ -76,6 +77,8 @@ def run_cosimulation(
             slope = [slopes[k][i] for i in index]
             stopped = _sub_steps(instance, moving_inputs, value, slope, t, h, sub_step)
         if stopped is not None:
+            if rows_at[k + 1] and stopped >= times[k + 1] - 1e-12 * max(1.0, abs(stopped)):
+                result[rows_at[k + 1]] = read(times[k + 1])
             return result, stopped
     return result, None
 
@@ -115,7 +118,8 @@ class _Derivatives:
     def set(self, instance: Instance, slope: list[float], t: float) -> None:
         """Give the FMU the input slopes of the interval that starts at ``t``."""
         n = len(self.index)
-        self.der[:] = slope if self.identity else [slope[i] for i in self.index]
+        values: list[Any] = slope if self.identity else [slope[i] for i in self.index]
+        self.der[:] = values
         status = instance.f["fmi2SetRealInputDerivatives"](
             instance.component, self.refs, n, self.order, self.der
         )

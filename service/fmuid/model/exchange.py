@@ -76,10 +76,12 @@ class _Model:
         self._check("GetNominals", self.fn["GetNominalsOfContinuousStates"](self.c, x, n))
 
     def apply(self, t: float) -> None:
-        """Inputs are set in :meth:`set_time` (fmpy's solver calls this for its input object)."""
+        """Do nothing: inputs are set in :meth:`set_time` (fmpy's solver calls this)."""
 
 
-def _event(instance: Instance, t: float, inputs: Channels | None, value: list[float]) -> float | None:
+def _event(
+    instance: Instance, t: float, inputs: Channels | None, value: list[float]
+) -> float | None:
     """Event mode at ``t`` (setting new inputs when given); returns the next time event.
 
     Raises ``_Stop`` when the FMU asks to terminate.
@@ -147,8 +149,16 @@ def run_model_exchange(
             if plan.rows_at[k]:
                 result[plan.rows_at[k]] = instance.read(outputs, t)
     except _Stop as stop:
+        last = _last_point(plan.times, stop.t)
+        if last >= 0 and plan.rows_at[last] and np.isnan(result[plan.rows_at[last][0]]).all():
+            result[plan.rows_at[last]] = instance.read(outputs, stop.t)
         return result, stop.t
     return result, None
+
+
+def _last_point(times: list[float], t: float) -> int:
+    """Index of the last grid time at or before ``t`` (within rounding), -1 if none."""
+    return int(np.searchsorted(times, t + 1e-12 * max(1.0, abs(t)), side="right")) - 1
 
 
 def _integrate(
@@ -160,7 +170,7 @@ def _integrate(
     t_event: float | None,
     completed: bool,
 ) -> float | None:
-    """Integrate from ``t`` to ``t_end``, handling events on the way; returns the next time event."""
+    """Integrate from ``t`` to ``t_end`` through events; return the next time event."""
     while t < t_end:
         t_stop = t_event if t_event is not None and t < t_event < t_end else t_end
         try:
@@ -176,9 +186,8 @@ def _integrate(
         _raise(model)
         step_event = False
         if completed:
-            enter, terminate = ctypes.c_bool(), ctypes.c_bool()
-            if not instance.v3:
-                enter, terminate = ctypes.c_int(), ctypes.c_int()
+            flag = ctypes.c_bool if instance.v3 else ctypes.c_int
+            enter, terminate = flag(), flag()
             instance.call("CompletedIntegratorStep", 1, ctypes.byref(enter),
                           ctypes.byref(terminate), when=f"at t = {t_reached} s")  # fmt: skip
             if terminate.value:

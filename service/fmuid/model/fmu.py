@@ -1,5 +1,7 @@
-"""A loaded FMU: checks that it can be run here (FMI 2.0 or 3.0, co-simulation or model exchange,
-a linux x86-64 binary) and lists its variables with their FMI types."""
+"""A loaded FMU: checks that it can run here and lists its variables with their FMI types.
+
+Supported: FMI 2.0 or 3.0, co-simulation or model exchange, with a linux x86-64 binary.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ import logging
 import posixpath
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,6 +30,23 @@ INTEGER_TYPES = frozenset(
      "UInt64"}
 )  # fmt: skip
 BINARY_DIR = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
+USABLE = {
+    "parameter": ("float", "integer", "boolean", "string"),
+    "input": ("float", "integer", "boolean"),
+    "output": ("float", "integer", "boolean"),
+}
+"""Variable kinds (:attr:`Variable.kind`) fmuid can set or read in each role."""
+_ROLE_HELP = {
+    "parameters": "only Real/Float parameters can be fitted; set others under 'fixed'",
+    "inputs": "inputs must be Real/Float, Integer, Enumeration or Boolean scalars",
+    "outputs": "outputs must be Real/Float, Integer, Enumeration or Boolean scalars",
+}
+_FIXED_HELP = {
+    "string": "give it a text value",
+    "float": "give it a number",
+    "integer": "give it a whole number",
+    "boolean": "give it 0 or 1",
+}
 
 
 @dataclass(frozen=True)
@@ -53,7 +73,8 @@ class Variable:
         FMI type name: ``Real``, ``Integer``, ``Boolean``, ``String``, ``Enumeration`` (FMI 2.0)
         or ``Float64``, ``Int32``, ``Binary``, ``Clock``, ... (FMI 3.0).
     shape
-        Array dimensions (FMI 3.0); empty for a scalar.
+        Array dimensions (FMI 3.0; -1 where a structural parameter sets the size); empty for a
+        scalar.
 
     """
 
@@ -85,9 +106,8 @@ class Variable:
 
     @property
     def type_label(self) -> str:
-        """The FMI type as a user reads it, e.g. ``Int32`` or ``Float64[3]`` for an array."""
-        dims = f"[{', '.join(map(str, self.shape))}]" if self.shape else ""
-        return f"{self.type}{dims}"
+        """The FMI type as a user reads it, e.g. ``Int32`` or ``Float64 array``."""
+        return f"{self.type} array" if self.shape else self.type
 
 
 def _check_archive(path: Path) -> set[str]:
@@ -135,7 +155,7 @@ def _start(value: object, type_name: str) -> float | None:
 
 def _variable(v: fmpy.model_description.ModelVariable) -> Variable:
     unit = v.unit if v.unit else (getattr(v.declaredType, "unit", None) if v.declaredType else None)
-    shape = tuple(int(d.start) if d.start is not None else 0 for d in v.dimensions)
+    shape = tuple(int(d.start) if d.start is not None else -1 for d in v.dimensions)
     return Variable(
         name=v.name,
         value_reference=int(v.valueReference),
@@ -241,9 +261,62 @@ class FmuModel:
         name = "co-simulation" if self.is_cosimulation else "model exchange"
         return f"FMI {self.fmi_version} {name}"
 
+    def usage_problems(
+        self,
+        free: Iterable[str],
+        fixed: Mapping[str, float | str],
+        inputs: Iterable[str],
+        outputs: Iterable[str],
+    ) -> list[str]:
+        """Variables whose FMI type does not fit the role a study gives them.
+
+        Free parameters must be Real/Float; fixed values must suit their parameter's type
+        (text for a String, 0/1 for a Boolean, a whole number for an Integer or Enumeration);
+        inputs and outputs must be numeric scalars (Real/Float, Integer, Enumeration, Boolean).
+        Names the FMU does not have are left to the caller.
+
+        Returns
+        -------
+        list of str
+            One message per problem, each naming the field, the variable and its type.
+
+        """
+        problems = []
+        roles = (("parameters", free, self.parameters, ("float",)),
+                 ("inputs", inputs, self.inputs, USABLE["input"]),
+                 ("outputs", outputs, self.outputs, USABLE["output"]))  # fmt: skip
+        for field, names, table, kinds in roles:
+            for name in names:
+                v = table.get(name)
+                if v is not None and v.kind not in kinds:
+                    problems.append(
+                        f"{field}.{name}: '{name}' is {_article(v.type_label)} "
+                        f"{v.causality}, which fmuid cannot use there ({_ROLE_HELP[field]})"
+                    )
+        for name, value in fixed.items():
+            v = self.parameters.get(name)
+            if v is None:
+                continue
+            fits = {
+                "string": isinstance(value, str),
+                "float": not isinstance(value, str),
+                "integer": not isinstance(value, str) and float(value).is_integer(),
+                "boolean": not isinstance(value, str) and value in (0, 1),
+            }.get(v.kind, False)
+            if not fits:
+                problems.append(
+                    f"fixed.{name}: '{name}' is {_article(v.type_label)} parameter; "
+                    f"{value!r} does not fit ({_FIXED_HELP.get(v.kind, 'it cannot be set')})"
+                )
+        return problems
+
     def __repr__(self) -> str:
         """Name, file and checksum prefix."""
         return f"FmuModel({self.model_name!r}, path={str(self.path)!r}, sha256={self.sha256[:12]})"
+
+
+def _article(word: str) -> str:
+    return ("an " if word[0].upper() in "AEIOU" else "a ") + word
 
 
 def _choose_interface(path: Path, description: ModelDescription, wanted: str | None) -> str:

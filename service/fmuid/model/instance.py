@@ -1,5 +1,7 @@
-"""One FMI instance (FMI 2.0 or 3.0, co-simulation or model exchange): typed get/set, the
-life-cycle calls the masters need, and :class:`FmuError` naming the FMI function and status.
+"""One FMI instance (FMI 2.0 or 3.0, co-simulation or model exchange).
+
+Typed get/set, the life-cycle calls the masters need, and :class:`FmuError` naming the FMI
+function and status.
 
 fmpy loads the binary and declares the C signatures; the calls themselves go straight to the
 library (``fmu._functions``) so that a failed call gives its status instead of an exception.
@@ -67,7 +69,9 @@ class Channels:
         groups: dict[str, list[int]] = {}
         for i, v in enumerate(variables):
             if v.type not in table or v.shape:
-                raise FmuError(f"variable {v.name!r} has type {v.type_label}, which fmuid cannot use")
+                raise FmuError(
+                    f"variable {v.name!r} has type {v.type_label}, which fmuid cannot use"
+                )
             groups.setdefault(table[v.type][0], []).append(i)
         self.version = version
         self.variables = list(variables)
@@ -91,7 +95,7 @@ class Channels:
         """Per-channel-set objects the masters build once (buffers of derivatives, subsets)."""
 
     def subset(self, index: Sequence[int]) -> Channels:
-        """The channels of the variables at ``index`` (made once, then cached)."""
+        """Return the channels of the variables at ``index`` (made once, then cached)."""
         key = "subset" + ",".join(map(str, index))
         found = self.helpers.get(key)
         if found is None:
@@ -113,7 +117,9 @@ def _to_c(variable: Variable, value: float | str) -> Any:
     if kind == "boolean" and number not in (0.0, 1.0):
         raise FmuError(f"{variable.name!r} is Boolean; it takes 0 or 1 (false/true), not {value!r}")
     if number != round(number):
-        raise FmuError(f"{variable.name!r} is {variable.type_label}; it takes whole numbers, not {value!r}")
+        raise FmuError(
+            f"{variable.name!r} is {variable.type_label}; it takes whole numbers, not {value!r}"
+        )
     return int(number)
 
 
@@ -176,7 +182,7 @@ class Instance:
         return self.prefix + _SUFFIX[status] if 0 <= status < len(_SUFFIX) else str(status)
 
     def fail(self, function: str, status: int, when: str) -> FmuError:
-        """The error for a failed FMI call, with the FMU's last message."""
+        """Return the error for a failed FMI call, with the FMU's last message."""
         last = self.messages[-1] if self.messages else "no message from the FMU"
         name = self.status_name(status)
         return FmuError(
@@ -235,7 +241,12 @@ class Instance:
         ``t`` is the time the values belong to (None for parameters), quoted on failure.
         """
         if channels.all_float:
-            channels.buffer[:] = values
+            try:
+                channels.buffer[:] = values
+            except TypeError:  # a text value: say which variable
+                for variable, value in zip(channels.variables, values, strict=True):
+                    _to_c(variable, value)
+                raise
             self._transfer(channels.setters[0], channels.groups[0], t)
             return
         for setter, group in zip(channels.setters, channels.groups, strict=True):
@@ -243,8 +254,10 @@ class Instance:
             self._transfer(setter, group, t)
 
     def read(self, channels: Channels, t: float) -> np.ndarray:
-        """The channels' variables at time ``t`` as numbers (Boolean as 0/1); valid until the
-        next read of the same channels."""
+        """Return the channels' variables at time ``t`` as numbers (Boolean as 0/1).
+
+        The array is valid until the next read of the same channels.
+        """
         if channels.all_float:
             self._transfer(channels.getters[0], channels.groups[0], t, read=True)
             return channels.view
@@ -267,11 +280,13 @@ class Instance:
             if read:
                 when = f"at t = {t} s"
             else:
-                when = "while setting the parameters" if t is None else f"for the inputs at t = {t} s"
+                when = (
+                    "while setting the parameters" if t is None else f"for the inputs at t = {t} s"
+                )
             raise self.fail(function, status, when)
 
     def writer(self, channels: Channels) -> Callable[[Sequence[float], float], None]:
-        """A fast :meth:`set` for the current instance (bound to its component)."""
+        """Return a fast :meth:`set` for the current instance (bound to its component)."""
         if not channels.all_float:
             return lambda values, t: self.set(channels, values, t)
         function, buffer, n = channels.setters[0], channels.buffer, channels.size
@@ -286,7 +301,7 @@ class Instance:
         return write
 
     def reader(self, channels: Channels) -> Callable[[float], np.ndarray]:
-        """A fast :meth:`read` for the current instance (bound to its component)."""
+        """Return a fast :meth:`read` for the current instance (bound to its component)."""
         if not channels.all_float:
             return lambda t: self.read(channels, t)
         function, view, n = channels.getters[0], channels.view, channels.size
@@ -301,7 +316,7 @@ class Instance:
         return read
 
     def stepper(self) -> Callable[[float, float], float | None]:
-        """A fast :meth:`do_step` for the current instance (bound to its component)."""
+        """Return a fast :meth:`do_step` for the current instance (bound to its component)."""
         if self.v3:
             return self.do_step
         call, component = self.f["fmi2DoStep"], self.component
@@ -336,7 +351,10 @@ class Instance:
             else:
                 info = fmi2EventInfo()
                 self.call("NewDiscreteStates", ctypes.byref(info), when=when)
-                again, terminate = bool(info.newDiscreteStatesNeeded), bool(info.terminateSimulation)
+                again, terminate = (
+                    bool(info.newDiscreteStatesNeeded),
+                    bool(info.terminateSimulation),
+                )
                 defined, t_next = bool(info.nextEventTimeDefined), info.nextEventTime
             if terminate or not again:
                 return terminate, t_next if defined else None

@@ -128,7 +128,7 @@ def _check_kind(variable: Variable, values: np.ndarray, t_in: np.ndarray) -> Non
     if bad.size:
         raise FmuError(
             f"input {variable.name!r} ({variable.type_label}) takes {need}; got "
-            f"{values[bad[0]]!r} at t = {t_in[bad[0]]} s"
+            f"{float(values[bad[0]])!r} at t = {float(t_in[bad[0]])} s"
         )
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from fmuid.errors import FmuError
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
-from fmuid.model.fmu import FmuModel, Variable
+from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Channels, Instance
 from fmuid.model.plan import RunPlan, make_plan
 
@@ -35,11 +35,6 @@ INPUT_STEP = 1e-3
 an input (the linear input is sampled at each sub-step's start)."""
 RECYCLE_AFTER = 500
 """Instances created before the library is reloaded, when the FMU's reset is unreliable."""
-_USABLE = {
-    "parameter": ("float", "integer", "boolean", "string"),
-    "input": ("float", "integer", "boolean"),
-    "output": ("float", "integer", "boolean"),
-}
 
 
 class Simulator:
@@ -80,6 +75,7 @@ class Simulator:
         self._instance = Instance(self.model, self._unzip_dir)
         self._instance.instantiate()
         self._fresh = True
+        self._terminated = False
         self.reset_reliable: bool | None = None
         self._channels: dict[tuple[str, ...], Channels] = {}
 
@@ -103,11 +99,11 @@ class Simulator:
                     f"FMU {self.model.model_name} has no {role} named {name!r}; "
                     f"its {role}s are: {', '.join(table) or 'none'}"
                 )
-            if variable.kind not in _USABLE[role]:
+            if variable.kind not in USABLE[role]:
                 raise FmuError(
                     f"FMU {self.model.model_name}: {role} {name!r} is of type "
                     f"{variable.type_label}, which fmuid cannot use as {role} "
-                    f"(usable: {', '.join(_USABLE[role])} scalars)"
+                    f"(usable: {', '.join(USABLE[role])} scalars)"
                 )
             found.append(variable)
         return found
@@ -172,7 +168,9 @@ class Simulator:
         plan = make_plan(input_time, input_values, inputs.variables, output_time)
         values = list(params.values())
         result, stopped = self._run(values, plan, par, inputs, out)
-        if self.reset_reliable is None:
+        if stopped is not None:
+            self._terminated = True
+        elif self.reset_reliable is None:
             self._check_reset(result, values, plan, par, inputs, out)
         if stopped is not None:
             late = np.asarray(output_time, dtype=float) > stopped
@@ -204,12 +202,17 @@ class Simulator:
             )  # fmt: skip
 
     def _start(self) -> Instance:
-        """An instance in the instantiated state: fresh, reset, or re-created."""
+        """Return an instance in the instantiated state: fresh, reset, or re-created.
+
+        After a run that the FMU terminated, the instance is re-created rather than reset
+        (some FMUs keep their terminate flag through a reset).
+        """
         instance = self._instance
         if self._fresh and instance.component is not None:
             self._fresh = False
             return instance
-        if self.reset_reliable is not False and instance.component is not None:
+        terminated, self._terminated = self._terminated, False
+        if self.reset_reliable is not False and not terminated and instance.component is not None:
             if instance.reset():
                 return instance
             logger.warning("%s: reset failed; instantiating again", self.model.model_name)
