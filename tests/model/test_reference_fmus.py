@@ -6,6 +6,7 @@ equations are known, with closed forms or scipy's ``solve_ivp``.
 
 from __future__ import annotations
 
+import ctypes
 from pathlib import Path
 
 import fmpy
@@ -15,7 +16,7 @@ from scipy.integrate import solve_ivp
 
 from fmuid.errors import FmuError
 from fmuid.model import fmu as fmu_module
-from fmuid.model.instance import Instance
+from fmuid.model.instance import Channels, Instance
 from fmuid.model.simulator import Simulator
 
 from .foreign import model_exchange_only, reference_fmu
@@ -144,6 +145,23 @@ def test_unusable_types_are_named() -> None:
     space = Simulator(reference_fmu("fmi3", "StateSpace"))
     with pytest.raises(FmuError, match="'y' is of type Float64 array"):
         space.simulate({}, t[:1], {}, t, ["y"])
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_string_values_are_set_as_text(version: str) -> None:
+    sim = _simulator(version, "Feedthrough", CS)
+    instance = sim._start()
+    channels = Channels([sim.model.inputs["String_input"]], sim.model.fmi_version)
+    instance.set(channels, ["hello"], None)
+    instance.enter_initialization(0.0, None)
+    instance.call("ExitInitializationMode")
+    ref = (ctypes.c_uint * 1)(sim.model.outputs["String_output"].value_reference)
+    text = (ctypes.c_char_p * 1)()
+    extra = (1,) if version == "fmi3" else ()
+    assert instance.f[instance.prefix + "GetString"](instance.component, ref, 1, text, *extra) == 0
+    assert text[0] == b"hello"
+    with pytest.raises(FmuError, match="'String_input' is a String; give it a text value"):
+        instance.set(channels, [1.0], None)
 
 
 def test_usage_problems_name_field_and_type() -> None:
