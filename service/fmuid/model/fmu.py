@@ -216,7 +216,9 @@ class FmuModel:
         try:
             description = fmpy.read_model_description(str(self.path))
         except Exception as exc:  # fmpy raises bare Exception, lxml and KeyError subclasses
-            raise FmuError(f"{self.path}: cannot read modelDescription.xml: {exc}") from exc
+            raise FmuError(
+                f"{self.path}: cannot read modelDescription.xml (FMI {version}): {exc}"
+            ) from exc
         self.model_description: ModelDescription = description
         self.interface = _choose_interface(self.path, description, interface)
         self.model_name: str = description.modelName
@@ -227,8 +229,8 @@ class FmuModel:
         binary = f"{BINARY_DIR[version]}/{self.model_identifier}.so"
         if binary not in names:
             raise FmuError(
-                f"{self.path}: the FMU has no linux x86-64 binary ({binary} is missing; "
-                "source-code-only FMUs are not compiled by fmuid)"
+                f"{self.path}: the FMI {version} FMU has no linux x86-64 binary ({binary} is "
+                "missing; source-code-only FMUs are not compiled by fmuid)"
             )
         self.parameters: dict[str, Variable] = {}
         self.inputs: dict[str, Variable] = {}

@@ -151,7 +151,8 @@ class Instance:
             )  # fmt: skip
         except Exception as exc:  # fmpy raises bare Exception when the library does not load
             raise FmuError(
-                f"FMU {model.path}: its binary for linux x86-64 does not load: {exc}",
+                f"FMU {model.path}: its binary for linux x86-64 does not load as "
+                f"{model.kind_label}: {exc}",
                 function="dlopen",
             ) from exc
         finally:
