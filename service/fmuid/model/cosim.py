@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -60,6 +61,7 @@ def run_cosimulation(
     moving = [False] * len(times) if input_step is None else np.any(plan.slope, axis=1).tolist()
     moving_inputs = inputs.subset(index)
     do_step, write, read = instance.stepper(), instance.writer(inputs), instance.reader(outputs)
+    write_moving = instance.writer(moving_inputs)
     for k, t in enumerate(times):
         if k and inputs.size:
             write(values[k], t)
@@ -75,7 +77,7 @@ def run_cosimulation(
         else:
             value = [values[k][i] for i in index]
             slope = [slopes[k][i] for i in index]
-            stopped = _sub_steps(instance, moving_inputs, value, slope, t, h, sub_step)
+            stopped = _sub_steps(do_step, write_moving, value, slope, t, h, sub_step)
         if stopped is not None:
             if rows_at[k + 1] and stopped >= times[k + 1] - 1e-12 * max(1.0, abs(stopped)):
                 result[rows_at[k + 1]] = read(times[k + 1])
@@ -84,21 +86,25 @@ def run_cosimulation(
 
 
 def _sub_steps(
-    instance: Instance,
-    inputs: Channels,
+    step: Callable[[float, float], float | None],
+    write: Callable[[Sequence[float], float], None],
     value: list[float],
     slope: list[float],
     t: float,
     h: float,
     input_step: float,
 ) -> float | None:
+    """Cross ``[t, t + h]`` in equal sub-steps of at most ``input_step``.
+
+    Each sub-step holds the linear input's value at its start; returns the stop time if the FMU
+    asks to stop, else None.
+    """
     n = math.ceil(h / input_step - 1e-9)
     for j in range(n):
         t_j = t + h * j / n
         if j:
-            sample = [v + s * (t_j - t) for v, s in zip(value, slope, strict=True)]
-            instance.set(inputs, sample, t_j)
-        stopped = instance.do_step(t_j, t + h * (j + 1) / n - t_j)
+            write([v + s * (t_j - t) for v, s in zip(value, slope, strict=True)], t_j)
+        stopped = step(t_j, t + h * (j + 1) / n - t_j)
         if stopped is not None:
             return stopped
     return None

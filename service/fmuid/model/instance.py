@@ -317,10 +317,27 @@ class Instance:
         return read
 
     def stepper(self) -> Callable[[float, float], float | None]:
-        """Return a fast :meth:`do_step` for the current instance (bound to its component)."""
+        """Return the co-simulation step of the current instance (bound to its component).
+
+        The step ``(t, h)`` returns None when it completed, else the time at which the FMU
+        asked to stop (``fmi2Discard`` with ``fmi2Terminated``, or ``terminateSimulation``);
+        any other failure raises :class:`FmuError`.
+        """
+        component = self.component
         if self.v3:
-            return self.do_step
-        call, component = self.f["fmi2DoStep"], self.component
+            call3 = self.f["fmi3DoStep"]
+            flags = [ctypes.c_bool() for _ in range(3)]
+            last = ctypes.c_double()
+            refs = (*map(ctypes.byref, flags), ctypes.byref(last))
+
+            def step3(t: float, h: float) -> float | None:
+                status = call3(component, t, h, True, *refs)
+                if status > 1:
+                    raise self.fail("fmi3DoStep", status, f"in the step from t = {t} s")
+                return last.value if flags[1].value else None
+
+            return step3
+        call = self.f["fmi2DoStep"]
 
         def step(t: float, h: float) -> float | None:
             status = call(component, t, h, 1)
@@ -359,25 +376,6 @@ class Instance:
                 defined, t_next = bool(info.nextEventTimeDefined), info.nextEventTime
             if terminate or not again:
                 return terminate, t_next if defined else None
-
-    def do_step(self, t: float, h: float) -> float | None:
-        """One co-simulation step; None when it completed, else the time the FMU stopped at.
-
-        Raises
-        ------
-        FmuError
-            When the step fails and the FMU did not ask to terminate.
-
-        """
-        if not self.v3:
-            return self._fmi2_outcome(self.f["fmi2DoStep"](self.component, t, h, 1), t)
-        flags = [ctypes.c_bool() for _ in range(3)]
-        last = ctypes.c_double()
-        status = self.f["fmi3DoStep"](self.component, t, h, True,
-                                      *map(ctypes.byref, flags), ctypes.byref(last))  # fmt: skip
-        if status > 1:
-            raise self.fail("fmi3DoStep", status, f"in the step from t = {t} s")
-        return last.value if flags[1].value else None
 
     def _fmi2_outcome(self, status: int, t: float) -> float | None:
         """None after a completed ``fmi2DoStep``; the stop time after a terminating discard."""
