@@ -106,6 +106,7 @@ def test_integer_and_boolean_columns_in_a_fit() -> None:
     }
     fit = fmuid.fit(path, [data], spec_from_json(json.dumps(body)))
     assert fit.chi2 == pytest.approx(0.0, abs=1e-18)
+    assert fit.to_dict()["fmu"]["input_handling"].startswith("co-simulation, linear inputs held")
     body["parameters"] = {"Int32_input": {"start": 1, "lower": 0, "upper": 2}}
     with pytest.raises(SpecError, match="no parameter 'Int32_input'"):
         make_problem(path, [data], spec_from_json(json.dumps(body)))

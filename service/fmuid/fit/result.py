@@ -55,6 +55,8 @@ class FitResult:
         The optimiser's final message.
     cost
         Simulations and wall time of the fit.
+    fmu_info
+        How the FMU was run: ``fmi_version``, ``interface`` and ``input_handling``.
 
     """
 
@@ -74,6 +76,7 @@ class FitResult:
     global_search: bool = True
     message: str = ""
     cost: Cost = Cost(0, 0.0)
+    fmu_info: dict[str, str] = field(default_factory=dict)
 
     def z_estimate(self) -> np.ndarray:
         """Return the estimate in fitted coordinates (log10 for log-scaled parameters)."""
@@ -105,7 +108,7 @@ class FitResult:
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form written by ``fmuid fit``."""
         return {
-            "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name},
+            "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name, **self.fmu_info},
             "n_data": self.n_data,
             "chi2": float(self.chi2),
             "sigma": {k: float(v) for k, v in self.sigma.items()},

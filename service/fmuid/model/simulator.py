@@ -262,6 +262,16 @@ def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
     _ALIASES[str(path)] = local_copy
 
 
+def fmu_summary(path: str | Path) -> dict[str, str]:
+    """Say how fmuid runs the FMU at ``path``: FMI version, interface and input handling."""
+    simulator = get_simulator(path)
+    return {
+        "fmi_version": simulator.model.fmi_version,
+        "interface": simulator.model.interface,
+        "input_handling": simulator.input_handling,
+    }
+
+
 def get_simulator(path: str | Path) -> Simulator:
     """Return this thread's :class:`Simulator` for ``path``, creating it on first use.
 
