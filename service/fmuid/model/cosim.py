@@ -9,10 +9,7 @@ over each sub-step (only on intervals where some input changes).
 
 from __future__ import annotations
 
-import ctypes
 import math
-from collections.abc import Callable, Sequence
-from typing import Any
 
 import numpy as np
 
@@ -52,42 +49,47 @@ def run_cosimulation(
     result = np.full((plan.n_rows, outputs.size), np.nan)
     times, rows_at = plan.times, plan.rows_at
     values, slopes = plan.value.tolist(), plan.slope.tolist()
-    index = inputs.continuous
-    derivatives = None
-    if input_step is None and index:
-        derivatives = inputs.helpers.get("derivatives") or _Derivatives(inputs)
-        inputs.helpers["derivatives"] = derivatives
     sub_step = math.inf if input_step is None else input_step
     moving = [False] * len(times) if input_step is None else np.any(plan.slope, axis=1).tolist()
-    moving_inputs = inputs.subset(index)
-    do_step, write, read = instance.stepper(), instance.writer(inputs), instance.reader(outputs)
-    write_moving = instance.writer(moving_inputs)
+    moving_inputs = inputs.subset(inputs.continuous)
+    fill, set_inputs, set_name = instance.bind_set(inputs)
+    get_outputs, out, get_name = instance.bind_get(outputs)
+    slope_setter = instance.bind_derivatives(inputs) if input_step is None else None
+    step = instance.stepper()
+    n_in, last = inputs.size, len(times) - 1
     for k, t in enumerate(times):
-        if k and inputs.size:
-            write(values[k], t)
-        if derivatives is not None:
-            derivatives.set(instance, slopes[k], t)
-        if rows_at[k]:
-            result[rows_at[k]] = read(t)
-        if k + 1 == len(times):
-            return result, None
+        if k and n_in:
+            fill(values[k])
+            if (status := set_inputs()) > 1:
+                raise instance.fail(set_name, status, f"for the inputs at t = {t} s")
+        if slope_setter is not None:
+            slope_setter[0](slopes[k])
+            if (status := slope_setter[1]()) > 1:
+                raise instance.fail("fmi2SetRealInputDerivatives", status, f"at t = {t} s")
+        if rows := rows_at[k]:
+            if (status := get_outputs()) > 1:
+                raise instance.fail(get_name, status, f"at t = {t} s")
+            result[rows] = out
+        if k == last:
+            break
         h = times[k + 1] - t
         if not moving[k] or h <= sub_step:
-            stopped = do_step(t, h)
+            status = step(t, h, 1)
+            stopped = None if status <= 1 else instance.step_outcome(status, t)
         else:
-            value = [values[k][i] for i in index]
-            slope = [slopes[k][i] for i in index]
-            stopped = _sub_steps(do_step, write_moving, value, slope, t, h, sub_step)
+            value = [values[k][i] for i in inputs.continuous]
+            slope = [slopes[k][i] for i in inputs.continuous]
+            stopped = _sub_steps(instance, moving_inputs, value, slope, t, h, sub_step)
         if stopped is not None:
             if rows_at[k + 1] and stopped >= times[k + 1] - 1e-12 * max(1.0, abs(stopped)):
-                result[rows_at[k + 1]] = read(times[k + 1])
+                result[rows_at[k + 1]] = instance.read(outputs, times[k + 1])
             return result, stopped
     return result, None
 
 
 def _sub_steps(
-    step: Callable[[float, float], float | None],
-    write: Callable[[Sequence[float], float], None],
+    instance: Instance,
+    inputs: Channels,
     value: list[float],
     slope: list[float],
     t: float,
@@ -99,35 +101,15 @@ def _sub_steps(
     Each sub-step holds the linear input's value at its start; returns the stop time if the FMU
     asks to stop, else None.
     """
+    step = instance.stepper()
     n = math.ceil(h / input_step - 1e-9)
     for j in range(n):
         t_j = t + h * j / n
         if j:
-            write([v + s * (t_j - t) for v, s in zip(value, slope, strict=True)], t_j)
-        stopped = step(t_j, t + h * (j + 1) / n - t_j)
-        if stopped is not None:
-            return stopped
-    return None
-
-
-class _Derivatives:
-    """``fmi2SetRealInputDerivatives`` of the float inputs, buffers made once per run."""
-
-    def __init__(self, inputs: Channels) -> None:
-        self.index = inputs.continuous
-        n = len(self.index)
-        self.refs = (ctypes.c_uint * n)(*(inputs.variables[i].value_reference for i in self.index))
-        self.order = (ctypes.c_int * n)(*([1] * n))
-        self.der = (ctypes.c_double * n)()
-        self.identity = n == inputs.size
-
-    def set(self, instance: Instance, slope: list[float], t: float) -> None:
-        """Give the FMU the input slopes of the interval that starts at ``t``."""
-        n = len(self.index)
-        values: list[Any] = slope if self.identity else [slope[i] for i in self.index]
-        self.der[:] = values
-        status = instance.f["fmi2SetRealInputDerivatives"](
-            instance.component, self.refs, n, self.order, self.der
-        )
+            instance.set(
+                inputs, [v + s * (t_j - t) for v, s in zip(value, slope, strict=True)], t_j
+            )
+        status = step(t_j, t + h * (j + 1) / n - t_j, 1)
         if status > 1:
-            raise instance.fail("fmi2SetRealInputDerivatives", status, f"at t = {t} s")
+            return instance.step_outcome(status, t_j)
+    return None

@@ -13,6 +13,7 @@ import ctypes
 import logging
 import os
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import fmpy
@@ -159,6 +160,7 @@ class Instance:
             os.chdir(cwd)  # fmpy changes into the binary's folder and may not change back
         self.f: dict[str, Callable[..., Any]] = self.fmu._functions
         self.component: Any = None
+        self._v3_step: tuple[Any, Any] = (None, None)
         self.instantiations = 0
         if not self.v3:
             self._callbacks = fmi2CallbackFunctions()
@@ -271,13 +273,7 @@ class Instance:
         self, function: str, group: tuple[str, list[int], Any, Any], t: float | None,
         read: bool = False,
     ) -> None:  # fmt: skip
-        index, refs, array = group[1], group[2], group[3]
-        n = len(index)
-        if self.v3:
-            status = self.f[function](self.component, refs, n, array, n)
-        else:
-            status = self.f[function](self.component, refs, n, array)
-        if status > 1:
+        if (status := self._status(function, group)) > 1:
             if read:
                 when = f"at t = {t} s"
             else:
@@ -286,64 +282,122 @@ class Instance:
                 )
             raise self.fail(function, status, when)
 
-    def writer(self, channels: Channels) -> Callable[[Sequence[float], float], None]:
-        """Return a fast :meth:`set` for the current instance (bound to its component)."""
-        if not channels.all_float:
-            return lambda values, t: self.set(channels, values, t)
-        function, buffer, n = channels.setters[0], channels.buffer, channels.size
-        args = (self.component, channels.refs, n, buffer) + ((n,) if self.v3 else ())
-        call = self.f[function]
+    def _status(self, function: str, group: tuple[str, list[int], Any, Any]) -> int:
+        index, refs, array = group[1], group[2], group[3]
+        n = len(index)
+        if self.v3:
+            return int(self.f[function](self.component, refs, n, array, n))
+        return int(self.f[function](self.component, refs, n, array))
 
-        def write(values: Sequence[float], t: float) -> None:
-            buffer[:] = values
-            if (status := call(*args)) > 1:
-                raise self.fail(function, status, f"for the inputs at t = {t} s")
+    def bind_set(
+        self, channels: Channels
+    ) -> tuple[Callable[[Sequence[float]], None], Callable[[], int], str]:
+        """Return ``(fill, call, function)`` for setting numeric values in a loop.
 
-        return write
+        ``fill(values)`` stores the values, ``call()`` passes them to this instance and returns
+        the FMI status (the first failed one), ``function`` names the FMI function(s). Bound to
+        the current component, without a Python call per value for all-float channels.
+        """
+        if channels.all_float:
+            n = channels.size
+            args = (self.component, channels.refs, n, channels.buffer) + ((n,) if self.v3 else ())
+            fill = partial(channels.buffer.__setitem__, slice(None))
+            return fill, partial(self.f[channels.setters[0]], *args), channels.setters[0]
 
-    def reader(self, channels: Channels) -> Callable[[float], np.ndarray]:
-        """Return a fast :meth:`read` for the current instance (bound to its component)."""
-        if not channels.all_float:
-            return lambda t: self.read(channels, t)
-        function, view, n = channels.getters[0], channels.view, channels.size
-        args = (self.component, channels.refs, n, channels.buffer) + ((n,) if self.v3 else ())
-        call = self.f[function]
+        def fill_groups(values: Sequence[float]) -> None:
+            for group in channels.groups:
+                group[3][:] = [_to_c(channels.variables[i], values[i]) for i in group[1]]
 
-        def read(t: float) -> np.ndarray:
-            if (status := call(*args)) > 1:
-                raise self.fail(function, status, f"at t = {t} s")
-            return view
+        def call_groups() -> int:
+            statuses = [self._status(f, g) for f, g in zip(channels.setters, channels.groups)]
+            return max(statuses, default=0)
 
-        return read
+        return fill_groups, call_groups, "/".join(channels.setters)
 
-    def stepper(self) -> Callable[[float, float], float | None]:
-        """Return the co-simulation step of the current instance (bound to its component).
+    def bind_get(self, channels: Channels) -> tuple[Callable[[], int], np.ndarray, str]:
+        """Return ``(call, values, function)`` for reading in a loop (see :meth:`bind_set`).
 
-        The step ``(t, h)`` returns None when it completed, else the time at which the FMU
-        asked to stop (``fmi2Discard`` with ``fmi2Terminated``, or ``terminateSimulation``);
-        any other failure raises :class:`FmuError`.
+        After ``call()`` returned a status below 2, ``values`` holds the numbers.
+        """
+        if channels.all_float:
+            n = channels.size
+            args = (self.component, channels.refs, n, channels.buffer) + ((n,) if self.v3 else ())
+            return partial(self.f[channels.getters[0]], *args), channels.view, channels.getters[0]
+
+        def call_groups() -> int:
+            worst = 0
+            for getter, group in zip(channels.getters, channels.groups, strict=True):
+                worst = max(worst, self._status(getter, group))
+                channels.values[group[1]] = group[3][:]
+            return worst
+
+        return call_groups, channels.values, "/".join(channels.getters)
+
+    def bind_derivatives(
+        self, channels: Channels
+    ) -> tuple[Callable[[Sequence[float]], None], Callable[[], int]] | None:
+        """Return ``(fill, call)`` for first-order input slopes (see :meth:`bind_set`).
+
+        ``fill`` takes the slopes of every channel and keeps the continuous inputs'; ``call``
+        is ``fmi2SetRealInputDerivatives``. None when no input is continuous.
+        """
+        index = channels.continuous
+        n = len(index)
+        if not n:
+            return None
+        refs = (ctypes.c_uint * n)(*(channels.variables[i].value_reference for i in index))
+        order = (ctypes.c_int * n)(*([1] * n))
+        der = (ctypes.c_double * n)()
+        call = partial(self.f["fmi2SetRealInputDerivatives"], self.component, refs, n, order, der)
+        if n == channels.size:
+            return partial(der.__setitem__, slice(None)), call
+
+        def fill(slope: Sequence[float]) -> None:
+            der[:] = [slope[i] for i in index]
+
+        return fill, call
+
+    def stepper(self) -> Callable[[float, float, int], int]:
+        """Return the co-simulation step ``(t, h, 1) -> status`` bound to the current component.
+
+        A status above 1 goes to :meth:`step_outcome`; an FMI 3.0 request to terminate is
+        reported as status 2 (as FMI 2.0 reports it, with ``fmi2Discard``).
         """
         component = self.component
-        if self.v3:
-            call3 = self.f["fmi3DoStep"]
-            flags = [ctypes.c_bool() for _ in range(3)]
-            last = ctypes.c_double()
-            refs = (*map(ctypes.byref, flags), ctypes.byref(last))
+        if not self.v3:
+            return partial(self.f["fmi2DoStep"], component)
+        call3 = self.f["fmi3DoStep"]
+        flags = [ctypes.c_bool() for _ in range(3)]
+        last = ctypes.c_double()
+        refs = (*map(ctypes.byref, flags), ctypes.byref(last))
+        self._v3_step = (flags[1], last)
 
-            def step3(t: float, h: float) -> float | None:
-                status = call3(component, t, h, True, *refs)
-                if status > 1:
-                    raise self.fail("fmi3DoStep", status, f"in the step from t = {t} s")
-                return last.value if flags[1].value else None
+        def step3(t: float, h: float, _: int) -> int:
+            status = int(call3(component, t, h, True, *refs))
+            return 2 if status <= 1 and flags[1].value else status
 
-            return step3
-        call = self.f["fmi2DoStep"]
+        return step3
 
-        def step(t: float, h: float) -> float | None:
-            status = call(component, t, h, 1)
-            return None if status <= 1 else self._fmi2_outcome(status, t)
+    def step_outcome(self, status: int, t: float) -> float:
+        """Return the time the FMU stopped at after a step with ``status`` > 1, or raise.
 
-        return step
+        Raises
+        ------
+        FmuError
+            When the step failed without a request to terminate.
+
+        """
+        if status == 2 and self.v3:
+            terminate, last = self._v3_step
+            if terminate.value:
+                return float(last.value)
+        elif status == 2:
+            terminated, when = ctypes.c_int(), ctypes.c_double(t)
+            self.f["fmi2GetBooleanStatus"](self.component, 3, ctypes.byref(terminated))
+            self.f["fmi2GetRealStatus"](self.component, 2, ctypes.byref(when))
+            if terminated.value:
+                return float(when.value)
+        raise self.fail(f"{self.prefix}DoStep", status, f"in the step from t = {t} s")
 
     def enter_initialization(self, t0: float, tolerance: float | None) -> None:
         """Set up the experiment at ``t0`` and enter initialization mode."""
@@ -376,15 +430,3 @@ class Instance:
                 defined, t_next = bool(info.nextEventTimeDefined), info.nextEventTime
             if terminate or not again:
                 return terminate, t_next if defined else None
-
-    def _fmi2_outcome(self, status: int, t: float) -> float | None:
-        """None after a completed ``fmi2DoStep``; the stop time after a terminating discard."""
-        if status <= 1:
-            return None
-        if status == 2:
-            terminated, when = ctypes.c_int(), ctypes.c_double(t)
-            self.f["fmi2GetBooleanStatus"](self.component, 3, ctypes.byref(terminated))
-            self.f["fmi2GetRealStatus"](self.component, 2, ctypes.byref(when))
-            if terminated.value:
-                return when.value
-        raise self.fail("fmi2DoStep", status, f"in the step from t = {t} s")

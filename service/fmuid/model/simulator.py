@@ -17,6 +17,7 @@ import threading
 import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import fmpy
 import numpy as np
@@ -33,6 +34,8 @@ logger = logging.getLogger(__name__)
 INPUT_STEP = 1e-3
 """Default longest sub-step [s] over which a co-simulation FMU without input derivatives holds
 an input (the linear input is sampled at each sub-step's start)."""
+PLAN_CACHE = 32
+"""Run plans kept per simulator (one per experiment of a study, typically)."""
 RECYCLE_AFTER = 500
 """Instances created before the library is reloaded, when the FMU's reset is unreliable."""
 
@@ -78,6 +81,7 @@ class Simulator:
         self._terminated = False
         self.reset_reliable: bool | None = None
         self._channels: dict[tuple[str, ...], Channels] = {}
+        self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], RunPlan]] = {}
 
     @property
     def input_handling(self) -> str:
@@ -165,7 +169,7 @@ class Simulator:
         par = self._channels_for(tuple(params), "parameter")
         inputs = self._channels_for(tuple(input_values), "input")
         out = self._channels_for(tuple(outputs), "output")
-        plan = make_plan(input_time, input_values, inputs.variables, output_time)
+        plan = self._plan(input_time, input_values, inputs, output_time)
         values = list(params.values())
         result, stopped = self._run(values, plan, par, inputs, out)
         if stopped is not None:
@@ -184,6 +188,30 @@ class Simulator:
                     status="terminateSimulation",
                 )
         return result
+
+    def _plan(
+        self,
+        input_time: np.ndarray,
+        input_values: Mapping[str, np.ndarray],
+        inputs: Channels,
+        output_time: np.ndarray,
+    ) -> RunPlan:
+        """Return the run's plan, reused while the same arrays come back with the same values.
+
+        A fit simulates each experiment many times with the same time and input arrays; the
+        plan costs about as much as a short run. The arrays are compared by value on every hit.
+        """
+        arrays = (input_time, output_time, *input_values.values())
+        key = (tuple(input_values), *map(id, arrays))
+        hit = self._plans.get(key)  # the arrays are kept alive there, so their ids are theirs
+        if hit is not None and all(map(np.array_equal, arrays, hit[1])):
+            return hit[2]
+        plan = make_plan(input_time, input_values, inputs.variables, output_time)
+        if len(self._plans) >= PLAN_CACHE:
+            self._plans.pop(next(iter(self._plans)))
+        copies = tuple(np.array(a, dtype=float, copy=True) for a in arrays)
+        self._plans[key] = (arrays, copies, plan)
+        return plan
 
     def _check_reset(
         self, first: np.ndarray, values: list[float | str], plan: RunPlan,
