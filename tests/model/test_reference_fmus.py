@@ -16,7 +16,8 @@ from scipy.integrate import solve_ivp
 
 from fmuid.errors import FmuError
 from fmuid.model import fmu as fmu_module
-from fmuid.model.instance import Channels, Instance
+from fmuid.model.channels import Channels
+from fmuid.model.instance import Instance
 from fmuid.model.simulator import Simulator
 
 from .foreign import model_exchange_only, reference_fmu

@@ -13,7 +13,8 @@ import math
 
 import numpy as np
 
-from fmuid.model.instance import Channels, Instance
+from fmuid.model.channels import Channels
+from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan
 
 

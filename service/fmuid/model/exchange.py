@@ -18,7 +18,8 @@ import numpy as np
 from fmpy.sundials import CVodeSolver
 
 from fmuid.errors import FmuError
-from fmuid.model.instance import Channels, Instance
+from fmuid.model.channels import Channels
+from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan
 
 RTOL = 1e-8

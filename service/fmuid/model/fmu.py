@@ -266,7 +266,7 @@ class FmuModel:
     def usage_problems(
         self,
         free: Iterable[str],
-        fixed: Mapping[str, float | str],
+        fixed: Mapping[str, float | bool | str],
         inputs: Iterable[str],
         outputs: Iterable[str],
     ) -> list[str]:
@@ -299,10 +299,11 @@ class FmuModel:
             v = self.parameters.get(name)
             if v is None:
                 continue
+            number = not isinstance(value, str | bool)
             fits = {
                 "string": isinstance(value, str),
-                "float": not isinstance(value, str),
-                "integer": not isinstance(value, str) and float(value).is_integer(),
+                "float": number,
+                "integer": number and float(value).is_integer(),
                 "boolean": not isinstance(value, str) and value in (0, 1),
             }.get(v.kind, False)
             if not fits:

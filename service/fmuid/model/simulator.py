@@ -23,10 +23,11 @@ import fmpy
 import numpy as np
 
 from fmuid.errors import FmuError
+from fmuid.model.channels import Channels
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
 from fmuid.model.fmu import USABLE, FmuModel, Variable
-from fmuid.model.instance import Channels, Instance
+from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan, make_plan
 
 logger = logging.getLogger(__name__)
