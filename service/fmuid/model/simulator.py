@@ -131,10 +131,11 @@ class Simulator:
     ) -> np.ndarray:
         """Simulate once and return the outputs at the output times.
 
-        Float inputs are linear between their samples; integer, Boolean and enumeration inputs
-        hold each sample until the next; all are constant before the first and after the last
-        sample. The run starts at ``min(input_time[0], output_time[0])``; at each output time the
-        inputs of that time are set before the outputs are read (see :attr:`input_handling`).
+        Real (float) inputs are linear between their samples; discrete Real, Integer, Boolean and
+        Enumeration inputs hold each sample until the next; all are constant before the first
+        and after the last sample. The run starts at ``min(input_time[0], output_time[0])``; at
+        each output time the inputs of that time are set before the outputs are read (see
+        :attr:`input_handling`).
 
         Parameters
         ----------
@@ -244,7 +245,10 @@ class Simulator:
         if self.reset_reliable is not False and not terminated and instance.component is not None:
             if instance.reset():
                 return instance
-            logger.warning("%s: reset failed; instantiating again", self.model.model_name)
+            logger.warning(
+                "%s: reset failed; every run now gets a fresh instance", self.model.model_name
+            )
+            self.reset_reliable = False
         instance.free()
         if instance.instantiations >= RECYCLE_AFTER:
             instance.unload()
