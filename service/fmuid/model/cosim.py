@@ -1,5 +1,8 @@
 """Co-simulation master of one run: step the FMU over the plan's grid with its own solver.
 
+The comments naming FMI functions on the lines that call into the FMU are read by
+:mod:`fmuid.jobs.crash` to say where a crashing FMU was.
+
 At each communication point the inputs for that time are set before the outputs are read, so a
 direct-feedthrough output sees the input of the same instant. Between points the inputs are
 linear: FMUs that accept input derivatives (FMI 2.0 ``canInterpolateInputs``) get the slope of
@@ -61,21 +64,21 @@ def run_cosimulation(
     for k, t in enumerate(times):
         if k and n_in:
             fill(values[k])
-            if (status := set_inputs()) > 1:
+            if (status := set_inputs()) > 1:  # fmi2SetReal & co.
                 raise instance.fail(set_name, status, f"for the inputs at t = {t} s")
         if slope_setter is not None:
             slope_setter[0](slopes[k])
-            if (status := slope_setter[1]()) > 1:
+            if (status := slope_setter[1]()) > 1:  # fmi2SetRealInputDerivatives
                 raise instance.fail("fmi2SetRealInputDerivatives", status, f"at t = {t} s")
         if rows := rows_at[k]:
-            if (status := get_outputs()) > 1:
+            if (status := get_outputs()) > 1:  # fmi2GetReal & co.
                 raise instance.fail(get_name, status, f"at t = {t} s")
             result[rows] = out
         if k == last:
             break
         h = times[k + 1] - t
         if not moving[k] or h <= sub_step:
-            status = step(t, h, 1)
+            status = step(t, h, 1)  # fmi2DoStep (fmi3DoStep)
             stopped = None if status <= 1 else instance.step_outcome(status, t)
         else:
             value = [values[k][i] for i in inputs.continuous]
@@ -110,7 +113,7 @@ def _sub_steps(
             instance.set(
                 inputs, [v + s * (t_j - t) for v, s in zip(value, slope, strict=True)], t_j
             )
-        status = step(t_j, t + h * (j + 1) / n - t_j, 1)
+        status = step(t_j, t + h * (j + 1) / n - t_j, 1)  # fmi2DoStep (fmi3DoStep)
         if status > 1:
             return instance.step_outcome(status, t_j)
     return None

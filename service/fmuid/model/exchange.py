@@ -50,7 +50,7 @@ class _Model:
             self.error = self.instance.fail(self.instance.prefix + name, status, when)
 
     def set_time(self, t: float) -> None:
-        self._check("SetTime", self.fn["SetTime"](self.c, t), t)
+        self._check("SetTime", self.fn["SetTime"](self.c, t), t)  # fmi2SetTime
         k, index = self.k, self.index
         slope = self.plan.slope[k, index]
         if index and np.any(slope):
@@ -61,17 +61,20 @@ class _Model:
                 self.error = self.error or exc
 
     def get_x(self, x: Any, n: int) -> None:
-        self._check("GetContinuousStates", self.fn["GetContinuousStates"](self.c, x, n))
+        status = self.fn["GetContinuousStates"](self.c, x, n)  # fmi2GetContinuousStates
+        self._check("GetContinuousStates", status)
 
     def set_x(self, x: Any, n: int) -> None:
-        self._check("SetContinuousStates", self.fn["SetContinuousStates"](self.c, x, n))
+        status = self.fn["SetContinuousStates"](self.c, x, n)  # fmi2SetContinuousStates
+        self._check("SetContinuousStates", status)
 
     def get_dx(self, dx: Any, n: int) -> None:
         name = "GetContinuousStateDerivatives" if self.instance.v3 else "GetDerivatives"
-        self._check(name, self.fn[name](self.c, dx, n))
+        self._check(name, self.fn[name](self.c, dx, n))  # fmi2GetDerivatives
 
     def get_z(self, z: Any, n: int) -> None:
-        self._check("GetEventIndicators", self.fn["GetEventIndicators"](self.c, z, n))
+        status = self.fn["GetEventIndicators"](self.c, z, n)  # fmi2GetEventIndicators
+        self._check("GetEventIndicators", status)
 
     def get_nominals(self, x: Any, n: int) -> None:
         self._check("GetNominals", self.fn["GetNominalsOfContinuousStates"](self.c, x, n))
