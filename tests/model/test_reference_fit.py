@@ -123,3 +123,18 @@ def test_wrong_types_in_a_spec_are_named() -> None:
     }
     with pytest.raises(SpecError, match="'Float64_fixed_parameter' is a Float64 parameter"):
         make_problem(path, [data], spec_from_json(json.dumps(body)))
+
+
+def test_cli_simulate_writes_integer_outputs_and_names_the_stop(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fmuid.cli import main
+
+    fmu = str(reference_fmu("fmi2", "Stair"))
+    data, out = tmp_path / "stair.csv", tmp_path / "out.csv"
+    data.write_text("time\n0\n1\n2.5\n9\n")
+    assert main(["simulate", "--fmu", fmu, "--data", str(data), "--out", str(out)]) == 0
+    assert out.read_text().split() == ["time,counter", "0,1", "1,2", "2.5,3", "9,10"]
+    data.write_text("time\n0\n10\n")
+    assert main(["simulate", "--fmu", fmu, "--data", str(data), "--out", str(out)]) == 2
+    assert "stopped the simulation at t = 9.0 s" in capsys.readouterr().err
