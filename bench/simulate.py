@@ -1,10 +1,14 @@
-"""Median wall time of one 10 s, 5 Hz tractor ramp run: fmuid Simulator vs fmpy.simulate_fmu."""
+"""Median wall time of one run per FMU kind: the built-in tractor (fmuid Simulator vs
+fmpy.simulate_fmu) and the Reference-FMUs in ../shared/reference-fmus (FMI 2.0/3.0,
+co-simulation/model exchange), when that folder exists."""
 
 from __future__ import annotations
 
+import os
 import statistics
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import fmpy
 import numpy as np
@@ -17,9 +21,26 @@ INPUT_TIME = np.array([0.0, 1.0, 1.5, 10.0])
 DELTA = np.array([0.0, 0.0, 0.17452, 0.17452])
 OUTPUT_TIME = np.round(np.arange(51) * 0.2, 10)
 OUTPUTS = ["gam_t", "gam_i"]
+REFERENCE_DIR = Path(
+    os.environ.get(
+        "FMUID_REFERENCE_FMUS", Path(__file__).resolve().parents[2] / "shared" / "reference-fmus"
+    )
+)
+RAMP = {"Float64_continuous_input": np.array([0.0, 0.0, 1.0, 1.0])}
+FOREIGN = [  # (file, interface, inputs, outputs)
+    ("fmi2/VanDerPol.fmu", "CoSimulation", {}, ["x0", "x1"]),
+    ("fmi3/VanDerPol.fmu", "CoSimulation", {}, ["x0", "x1"]),
+    ("fmi2/VanDerPol.fmu", "ModelExchange", {}, ["x0", "x1"]),
+    ("fmi3/VanDerPol.fmu", "ModelExchange", {}, ["x0", "x1"]),
+    ("fmi2/BouncingBall.fmu", "ModelExchange", {}, ["h"]),
+    ("fmi2/Feedthrough.fmu", "CoSimulation", RAMP, ["Float64_continuous_output"]),
+    ("fmi3/Feedthrough.fmu", "CoSimulation", RAMP, ["Float64_continuous_output"]),
+    ("fmi2/Feedthrough.fmu", "ModelExchange", RAMP, ["Float64_continuous_output"]),
+]
 
 
 def median_seconds(run: Callable[[], object], runs: int) -> float:
+    """Median wall time [s] of ``runs`` calls after one warm-up call."""
     run()
     times = []
     for _ in range(runs):
@@ -29,7 +50,8 @@ def median_seconds(run: Callable[[], object], runs: int) -> float:
     return statistics.median(times)
 
 
-def main() -> None:
+def tractor_rows() -> list[tuple[str, str, float]]:
+    """The built-in tractor: fmuid's Simulator and fmpy.simulate_fmu."""
     path = builtin_fmu("tractor_implement")
     sim = Simulator(path)
     signal = np.array(
@@ -47,13 +69,43 @@ def main() -> None:
             input=signal, output=OUTPUTS,
         )  # fmt: skip
 
-    rows = [("fmuid Simulator", median_seconds(ours, RUNS)),
-            ("fmpy.simulate_fmu", median_seconds(plain, RUNS))]  # fmt: skip
-    print(f"tractor_implement, 10 s ramp, outputs at 5 Hz, median of {RUNS} runs")
-    print(f"{'simulator':<20} {'median ms':>10} {'runs/s':>10}")
-    for name, seconds in rows:
-        print(f"{name:<20} {seconds * 1e3:>10.3f} {1.0 / seconds:>10.0f}")
+    rows = [
+        ("tractor_implement (fmuid Simulator)", sim.input_handling, median_seconds(ours, RUNS)),
+        ("tractor_implement (fmpy.simulate_fmu)", "fmpy", median_seconds(plain, RUNS)),
+    ]
     sim.close()
+    return rows
+
+
+def foreign_rows(runs: int) -> list[tuple[str, str, float]]:
+    """Reference-FMUs through fmuid's Simulator, 10 s with outputs at 5 Hz."""
+    rows = []
+    for name, interface, inputs, outputs in FOREIGN:
+        path = REFERENCE_DIR / name
+        if not path.is_file():
+            continue
+        sim = Simulator(path, interface=interface)
+        t_in = INPUT_TIME if inputs else INPUT_TIME[:1]
+        seconds = median_seconds(
+            lambda sim=sim, t_in=t_in, inputs=inputs, outputs=outputs: sim.simulate(
+                {}, t_in, inputs, OUTPUT_TIME, outputs
+            ),
+            runs,
+        )
+        rows.append((f"{name} ({sim.model.kind_label})", sim.input_handling, seconds))
+        sim.close()
+    return rows
+
+
+def main() -> None:
+    """Print the table."""
+    rows = tractor_rows() + foreign_rows(RUNS // 4)
+    print("10 s runs, outputs at 5 Hz (a 1 s ramp input where the FMU has one); median ms")  # noqa: T201
+    print(f"{'FMU':<58} {'median ms':>10} {'runs/s':>8}  input handling")  # noqa: T201
+    for name, handling, seconds in rows:
+        print(f"{name:<58} {seconds * 1e3:>10.3f} {1.0 / seconds:>8.0f}  {handling}")  # noqa: T201
+    if len(rows) == 2:
+        print(f"(no Reference-FMUs in {REFERENCE_DIR})")  # noqa: T201
 
 
 if __name__ == "__main__":

@@ -85,13 +85,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     from fmuid.data import load_experiment, load_spec
     from fmuid.fit.predictor import merged_inputs
-    from fmuid.model.fmu import FmuModel
+    from fmuid.model.fmu import USABLE, FmuModel
     from fmuid.model.simulator import Simulator
 
     fmu = _fmu_path(args.fmu)
     model = FmuModel(fmu)
     experiment = load_experiment(Path(args.data))
-    params: dict[str, float] = {}
+    params: dict[str, float | str] = {}
     if args.spec:
         spec = load_spec(Path(args.spec))
         params.update(spec.fixed)
@@ -99,6 +99,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         unknown = sorted(set(params) - set(model.parameters))
         if unknown:
             raise SpecError(f"{args.spec}: the FMU has no parameter(s) {', '.join(unknown)}")
+        problems = model.usage_problems(spec.parameters, spec.fixed, (), ())
+        if problems:
+            raise SpecError("\n".join(f"{args.spec}: {problem}" for problem in problems))
     unknown_cols = [
         c
         for c in experiment.columns
@@ -111,8 +114,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             f"{experiment.name}: column(s) {', '.join(unknown_cols)} are not FMU variables"
         )
     inputs = [c for c in experiment.columns if c in model.inputs]
-    input_time, input_values = merged_inputs(experiment, inputs)
-    outputs = list(model.outputs)
+    held = [c for c in inputs if not model.inputs[c].is_continuous]
+    input_time, input_values = merged_inputs(experiment, inputs, held)
+    outputs = [n for n, v in model.outputs.items() if v.kind in USABLE["output"]]
+    if not outputs:
+        types = ", ".join(f"{n} ({v.type_label})" for n, v in model.outputs.items()) or "none"
+        raise FmuError(f"{fmu}: no output fmuid can read (its outputs: {types})")
     y = Simulator(fmu).simulate(params, input_time, input_values, experiment.time, outputs)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from fmuid.data import Experiment, Spec, check_against_model
+from fmuid.errors import SpecError
 from fmuid.fit.optimize import fit_problem
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import FitResult
@@ -29,6 +30,10 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
     """
     model = FmuModel(Path(fmu))
     check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
+    free = [*spec.parameters, *(n for p in spec.physics.values() for n in p.parameters)]
+    problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
+    if problems:
+        raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
     get_simulator(fmu)
     return Problem(fmu, experiments, spec, model=model)
 

@@ -96,7 +96,7 @@ def test_model_exchange_only_fmu_is_422(service, good_before, step_csv, msd_file
     )
     assert response.status_code == 422, response.text
     assert "me.fmu" in response.json()["detail"]
-    assert "co-simulation" in response.json()["detail"]
+    assert "does not export fmi2SetTime" in response.json()["detail"]
 
 
 def test_nothing_else_disturbed(service, good_before, step_csv):

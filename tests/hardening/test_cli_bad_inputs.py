@@ -59,7 +59,7 @@ def fmi3(msd: Path, target: Path) -> Path:
     [
         (lambda msd, target: target.write_bytes(b"hello") and target, "zip"),
         (fmi3, "3.0"),
-        (model_exchange_only, "co-simulation"),
+        (model_exchange_only, "model exchange"),
         (lambda msd, t: rewrite_fmu(msd, t, {"binaries/linux64/msd.so": None}), "linux64"),
         (
             lambda msd, t: rewrite_fmu(msd, t, {"binaries/linux64/msd.so": b"\x7fELF junk"}),

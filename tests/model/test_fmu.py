@@ -110,14 +110,24 @@ def test_wrong_fmi_version_is_rejected(msd_fmu: Path, tmp_path: Path) -> None:
         FmuModel(_rewrite(msd_fmu, tmp_path / "v1.fmu", edit))
 
 
-def test_missing_cosimulation_is_rejected(msd_fmu: Path, tmp_path: Path) -> None:
+def test_missing_interfaces_are_rejected(msd_fmu: Path, tmp_path: Path) -> None:
     def edit(name: str, data: bytes):
         if name == "modelDescription.xml":
             data = re.sub(rb"<CoSimulation[^>]*/>", b'<ModelExchange modelIdentifier="msd"/>', data)
         return name, data
 
-    with pytest.raises(FmuError, match="co-simulation"):
-        FmuModel(_rewrite(msd_fmu, tmp_path / "me.fmu", edit))
+    me_only = _rewrite(msd_fmu, tmp_path / "me.fmu", edit)
+    assert FmuModel(me_only).interface == "ModelExchange"
+    with pytest.raises(FmuError, match="no CoSimulation interface"):
+        FmuModel(me_only, interface="CoSimulation")
+
+    def drop(name: str, data: bytes):
+        if name == "modelDescription.xml":
+            data = re.sub(rb"<CoSimulation[^>]*/>", b"", data)
+        return name, data
+
+    with pytest.raises(FmuError, match="neither a co-simulation nor a model-exchange"):
+        FmuModel(_rewrite(msd_fmu, tmp_path / "none.fmu", drop))
 
 
 def test_missing_linux_binary_is_rejected(msd_fmu: Path, tmp_path: Path) -> None:

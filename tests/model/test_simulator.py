@@ -92,3 +92,13 @@ def test_get_simulator_caches_per_path(msd_fmu: Path) -> None:
     first = get_simulator(msd_fmu)
     assert get_simulator(str(msd_fmu)) is first
     assert first.model.model_name == "msd"
+
+
+def test_plan_reuse_sees_arrays_changed_in_place(tractor: Simulator) -> None:
+    delta = RAMP_DELTA.copy()
+    first = tractor.simulate({}, RAMP_TIME, {"delta": delta}, OUTPUT_TIME, OUTS)
+    delta *= 2.0
+    doubled = tractor.simulate({}, RAMP_TIME, {"delta": delta}, OUTPUT_TIME, OUTS)
+    np.testing.assert_allclose(doubled[:, 0], 2.0 * first[:, 0], rtol=1e-9, atol=1e-15)
+    fresh = tractor.simulate({}, RAMP_TIME, {"delta": 2.0 * RAMP_DELTA}, OUTPUT_TIME, OUTS)
+    np.testing.assert_array_equal(doubled, fresh)

@@ -179,7 +179,8 @@ class Spec(BaseModel):
     parameters
         Free parameters by FMU parameter name (at least one).
     fixed
-        Start-value overrides of other FMU parameters.
+        Start-value overrides of other FMU parameters (true/false or 0/1 for a Boolean, text
+        for a String).
     inputs
         FMU inputs read from the data; empty means every data column that is an FMU input.
     outputs
@@ -198,7 +199,7 @@ class Spec(BaseModel):
     model_config = _CONFIG
 
     parameters: dict[str, ParameterSpec]
-    fixed: dict[str, FiniteFloat] = {}
+    fixed: dict[str, FiniteFloat | bool | str] = {}
     inputs: list[str] = []
     outputs: dict[str, OutputSpec]
     confidence: Annotated[float, Field(gt=0, lt=1)] = 0.68

@@ -16,6 +16,7 @@ from scipy.optimize import least_squares
 from fmuid.errors import FmuError
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import Cost, FitResult
+from fmuid.model.simulator import fmu_summary
 from fmuid.progress import Progress, ProgressCallback
 
 log = logging.getLogger(__name__)
@@ -260,4 +261,5 @@ def make_fit_result(
         global_search=global_search,
         message=message,
         cost=Cost(problem.simulations - sims0, time.perf_counter() - t0),
+        fmu_info=fmu_summary(problem.fmu_path),
     )

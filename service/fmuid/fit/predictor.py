@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Protocol
 
@@ -23,12 +23,13 @@ class Predictor(Protocol):
 
 
 def merged_inputs(
-    experiment: Experiment, inputs: Sequence[str]
+    experiment: Experiment, inputs: Sequence[str], held: Collection[str] = ()
 ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Put every input on the union of their sample times.
 
     Each input is linear between its own samples, so evaluating it at the union of all
-    breakpoints reproduces it exactly as a piecewise-linear signal.
+    breakpoints reproduces it exactly as a piecewise-linear signal; an input in ``held``
+    (integer, Boolean, discrete) keeps each sample's value until its next sample.
 
     Returns
     -------
@@ -40,7 +41,12 @@ def merged_inputs(
         return experiment.time[:1].copy(), {}
     samples = {name: experiment.input_samples(name) for name in inputs}
     time = np.unique(np.concatenate([t for t, _ in samples.values()]))
-    values = {name: np.interp(time, t, v) for name, (t, v) in samples.items()}
+    values = {
+        name: v[np.maximum(np.searchsorted(t, time, side="right") - 1, 0)]
+        if name in held
+        else np.interp(time, t, v)
+        for name, (t, v) in samples.items()
+    }
     return time, values
 
 
@@ -58,7 +64,9 @@ class FmuPredictor:
 
     """
 
-    def __init__(self, fmu_path: str | Path, fixed: Mapping[str, float], inputs: Sequence[str]):
+    def __init__(
+        self, fmu_path: str | Path, fixed: Mapping[str, float | str], inputs: Sequence[str]
+    ):
         self.fmu_path = str(fmu_path)
         self.fixed = dict(fixed)
         self.inputs = tuple(inputs)
@@ -74,7 +82,9 @@ class FmuPredictor:
         """Return the experiment's inputs on their merged sample times (cached)."""
         cached = self._inputs_cache.get(id(experiment))
         if cached is None or cached[0] is not experiment:
-            cached = (experiment, *merged_inputs(experiment, self.inputs))
+            variables = get_simulator(self.fmu_path).model.inputs
+            held = [n for n in self.inputs if n in variables and not variables[n].is_continuous]
+            cached = (experiment, *merged_inputs(experiment, self.inputs, held))
             self._inputs_cache[id(experiment)] = cached
         return cached[1], cached[2]
 

@@ -55,6 +55,8 @@ class FitResult:
         The optimiser's final message.
     cost
         Simulations and wall time of the fit.
+    fmu_info
+        How the FMU was run: ``fmi_version``, ``interface`` and ``input_handling``.
 
     """
 
@@ -70,10 +72,11 @@ class FitResult:
     sigma: dict[str, float]
     sigma_method: dict[str, str]
     jacobian: np.ndarray = field(repr=False)
-    fixed: dict[str, float] = field(default_factory=dict)
+    fixed: dict[str, float | str] = field(default_factory=dict)
     global_search: bool = True
     message: str = ""
     cost: Cost = Cost(0, 0.0)
+    fmu_info: dict[str, str] = field(default_factory=dict)
 
     def z_estimate(self) -> np.ndarray:
         """Return the estimate in fitted coordinates (log10 for log-scaled parameters)."""
@@ -105,7 +108,7 @@ class FitResult:
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form written by ``fmuid fit``."""
         return {
-            "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name},
+            "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name, **self.fmu_info},
             "n_data": self.n_data,
             "chi2": float(self.chi2),
             "sigma": {k: float(v) for k, v in self.sigma.items()},
@@ -123,7 +126,7 @@ class FitResult:
                 }
                 for n, s in zip(self.names, self.scales, strict=True)
             },
-            "fixed": {k: float(v) for k, v in self.fixed.items()},
+            "fixed": {k: v if isinstance(v, str) else float(v) for k, v in self.fixed.items()},
             "global_search": self.global_search,
             "message": self.message,
             "cost": self.cost.to_dict(),

@@ -2,9 +2,10 @@
 
 An FMU is a zip file with native code in it. Before it is stored for a job it must be a zip
 within size limits (declared unpacked size, compression ratio, number of members), with no
-member escaping the extraction folder (absolute paths, ``..``, symbolic links), FMI 2.0 with
-co-simulation and a linux64 binary (:class:`fmuid.model.fmu.FmuModel`), and that binary must
-load and export the FMI 2.0 functions; the load is tried in a separate, memory-limited process
+member escaping the extraction folder (absolute paths, ``..``, symbolic links), FMI 2.0 or 3.0
+with co-simulation or model exchange and a linux x86-64 binary
+(:class:`fmuid.model.fmu.FmuModel`), and that binary must load and export the FMI functions
+fmuid calls; the load is tried in a separate, memory-limited process
 (:mod:`fmuid.jobs.probe_fmu`) because loading a library runs its code.
 """
 
@@ -91,7 +92,7 @@ def probe_binary(path: Path, name: str) -> None:
     Raises
     ------
     FmuError
-        When the binary does not load, lacks an FMI 2.0 function, crashes or hangs on load.
+        When the binary does not load, lacks an FMI function, crashes or hangs on load.
 
     """
     script = Path(__file__).with_name("probe_fmu.py")
@@ -130,8 +131,8 @@ def check_fmu(path: Path, name: str, max_unpacked_bytes: int) -> FmuModel:
     ------
     FmuError
         Naming the problem: not a zip, too big unpacked, zip bomb, a path escaping the
-        extraction folder, not FMI 2.0, no co-simulation, no linux64 binary, a binary that does
-        not load.
+        extraction folder, not FMI 2.0 or 3.0, neither co-simulation nor model exchange, no linux
+        x86-64 binary, a binary that does not load.
 
     """
     check_archive(path, name, max_unpacked_bytes)

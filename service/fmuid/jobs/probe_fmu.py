@@ -1,4 +1,4 @@
-"""Load an FMU's linux64 binary in a throw-away process and check its FMI 2.0 functions.
+"""Load an FMU's linux binary in a throw-away process and check its FMI 2.0/3.0 functions.
 
 Run as a script (``python -I probe_fmu.py FMU MEMORY_MB``) by :mod:`fmuid.jobs.fmucheck`; it
 imports only the standard library so that it starts fast, and it limits its own memory and file
@@ -19,47 +19,60 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-REQUIRED = (
-    "fmi2GetVersion",
-    "fmi2Instantiate",
-    "fmi2FreeInstance",
-    "fmi2SetupExperiment",
-    "fmi2EnterInitializationMode",
-    "fmi2ExitInitializationMode",
-    "fmi2Reset",
-    "fmi2SetReal",
-    "fmi2GetReal",
-    "fmi2DoStep",
-)
+COMMON = {
+    "2.0": ("fmi2GetVersion", "fmi2Instantiate", "fmi2FreeInstance", "fmi2SetupExperiment",
+            "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Reset",
+            "fmi2SetReal", "fmi2GetReal"),
+    "3.0": ("fmi3GetVersion", "fmi3FreeInstance", "fmi3EnterInitializationMode",
+            "fmi3ExitInitializationMode", "fmi3Reset", "fmi3SetFloat64", "fmi3GetFloat64"),
+}  # fmt: skip
+INTERFACE = {
+    ("2.0", "CoSimulation"): ("fmi2DoStep",),
+    ("2.0", "ModelExchange"): ("fmi2SetTime", "fmi2SetContinuousStates", "fmi2GetDerivatives",
+                               "fmi2NewDiscreteStates", "fmi2EnterContinuousTimeMode"),
+    ("3.0", "CoSimulation"): ("fmi3InstantiateCoSimulation", "fmi3DoStep"),
+    ("3.0", "ModelExchange"): ("fmi3InstantiateModelExchange", "fmi3SetTime",
+                               "fmi3SetContinuousStates", "fmi3GetContinuousStateDerivatives",
+                               "fmi3UpdateDiscreteStates", "fmi3EnterContinuousTimeMode"),
+}  # fmt: skip
+"""FMI functions the binary must export, by FMI version and the interface fmuid drives."""
+BINARIES = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
 
 
 def _probe(fmu: Path, workdir: Path) -> str | None:
     with zipfile.ZipFile(fmu) as zf:
         root = ET.fromstring(zf.read("modelDescription.xml"))
-        cs = root.find("CoSimulation")
-        if cs is None:
-            return "modelDescription.xml has no CoSimulation element"
-        ident = cs.get("modelIdentifier", "")
+        version = "3.0" if root.get("fmiVersion", "").startswith("3.") else root.get("fmiVersion")
+        if version not in BINARIES:
+            return f"FMI version {version} is not supported (only 2.0 and 3.0)"
+        kind = next((k for k in ("CoSimulation", "ModelExchange") if root.find(k) is not None), "")
+        if not kind:
+            return "modelDescription.xml has neither CoSimulation nor ModelExchange"
+        ident = root.find(kind).get("modelIdentifier", "")  # type: ignore[union-attr]
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
             return f"modelIdentifier {ident!r} is not a valid C identifier"
-        members = [n for n in zf.namelist() if n.startswith("binaries/linux64/") and n[-1] != "/"]
-        if f"binaries/linux64/{ident}.so" not in members:
-            return f"binaries/linux64/{ident}.so is missing"
+        folder = BINARIES[version]
+        members = [n for n in zf.namelist() if n.startswith(folder + "/") and n[-1] != "/"]
+        if f"{folder}/{ident}.so" not in members:
+            return f"{folder}/{ident}.so is missing"
         for name in members:
             target = workdir / Path(name).name
             with zf.open(name) as src, open(target, "wb") as out:
                 shutil.copyfileobj(src, out)
+    binary = f"{folder}/{ident}.so"
     try:
         lib = ctypes.CDLL(str(workdir / f"{ident}.so"))
     except OSError as exc:
-        return f"binaries/linux64/{ident}.so does not load: {exc}"
-    missing = [name for name in REQUIRED if not hasattr(lib, name)]
+        return f"{binary} does not load: {exc}"
+    required = COMMON[version] + INTERFACE[(version, kind)]
+    missing = [name for name in required if not hasattr(lib, name)]
     if missing:
-        return f"binaries/linux64/{ident}.so does not export {', '.join(missing)}"
-    lib.fmi2GetVersion.restype = ctypes.c_char_p
-    version = lib.fmi2GetVersion()
-    if version != b"2.0":
-        return f"fmi2GetVersion() of binaries/linux64/{ident}.so returns {version!r}, not '2.0'"
+        return f"{binary} does not export {', '.join(missing)}"
+    get_version = getattr(lib, f"fmi{version[0]}GetVersion")
+    get_version.restype = ctypes.c_char_p
+    found = get_version()
+    if not (found or b"").startswith(version[0].encode()):
+        return f"fmi{version[0]}GetVersion() of {binary} returns {found!r}, not {version!r}"
     return None
 
 

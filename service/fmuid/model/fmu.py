@@ -1,4 +1,7 @@
-"""A loaded FMU: checks it is FMI 2.0 co-simulation for linux64 and lists its variables."""
+"""A loaded FMU: checks that it can run here and lists its variables with their FMI types.
+
+Supported: FMI 2.0 or 3.0, co-simulation or model exchange, with a linux x86-64 binary.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +10,7 @@ import logging
 import posixpath
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,10 +21,37 @@ from fmuid.errors import FmuError
 
 logger = logging.getLogger(__name__)
 
+CO_SIMULATION = "CoSimulation"
+MODEL_EXCHANGE = "ModelExchange"
+
+FLOAT_TYPES = frozenset({"Real", "Float64", "Float32"})
+INTEGER_TYPES = frozenset(
+    {"Integer", "Enumeration", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64",
+     "UInt64"}
+)  # fmt: skip
+BINARY_DIR = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
+USABLE = {
+    "parameter": ("float", "integer", "boolean", "string"),
+    "input": ("float", "integer", "boolean"),
+    "output": ("float", "integer", "boolean"),
+}
+"""Variable kinds (:attr:`Variable.kind`) fmuid can set or read in each role."""
+_ROLE_HELP = {
+    "parameters": "only Real/Float parameters can be fitted; set others under 'fixed'",
+    "inputs": "inputs must be Real/Float, Integer, Enumeration or Boolean scalars",
+    "outputs": "outputs must be Real/Float, Integer, Enumeration or Boolean scalars",
+}
+_FIXED_HELP = {
+    "string": "give it a text value",
+    "float": "give it a number",
+    "integer": "give it a whole number",
+    "boolean": "give it 0 or 1",
+}
+
 
 @dataclass(frozen=True)
 class Variable:
-    """One real scalar variable of an FMU, with its FMI names.
+    """One scalar variable of an FMU, with its FMI names.
 
     Attributes
     ----------
@@ -31,13 +62,19 @@ class Variable:
     causality
         ``parameter``, ``input``, ``output``, ...
     variability
-        ``tunable``, ``fixed``, ``continuous``, ...
+        ``tunable``, ``fixed``, ``continuous``, ``discrete``, ...
     start
-        Start value, or None when the FMU gives none.
+        Start value of a numeric variable (Boolean as 0/1), or None.
     unit
         Unit name, or None.
     description
         Free text (may be empty).
+    type
+        FMI type name: ``Real``, ``Integer``, ``Boolean``, ``String``, ``Enumeration`` (FMI 2.0)
+        or ``Float64``, ``Int32``, ``Binary``, ``Clock``, ... (FMI 3.0).
+    shape
+        Array dimensions (FMI 3.0; -1 where a structural parameter sets the size); empty for a
+        scalar.
 
     """
 
@@ -48,6 +85,29 @@ class Variable:
     start: float | None
     unit: str | None
     description: str
+    type: str = "Real"
+    shape: tuple[int, ...] = ()
+
+    @property
+    def kind(self) -> str:
+        """``float``, ``integer`` (also Enumeration), ``boolean``, ``string`` or ``unusable``."""
+        if self.shape:
+            return "unusable"
+        if self.type in FLOAT_TYPES:
+            return "float"
+        if self.type in INTEGER_TYPES:
+            return "integer"
+        return {"Boolean": "boolean", "String": "string"}.get(self.type, "unusable")
+
+    @property
+    def is_continuous(self) -> bool:
+        """Whether an input is linear between samples (a float that is not ``discrete``)."""
+        return self.kind == "float" and self.variability != "discrete"
+
+    @property
+    def type_label(self) -> str:
+        """The FMI type as a user reads it, e.g. ``Int32`` or ``Float64 array``."""
+        return f"{self.type} array" if self.shape else self.type
 
 
 def _check_archive(path: Path) -> set[str]:
@@ -77,25 +137,48 @@ def _fmi_version(path: Path, names: set[str]) -> str:
             root = ET.fromstring(archive.read("modelDescription.xml"))
     except ET.ParseError as exc:
         raise FmuError(f"{path}: modelDescription.xml is not valid XML: {exc}") from exc
-    return root.get("fmiVersion", "unknown")
+    version = root.get("fmiVersion", "unknown")
+    return "3.0" if version.startswith("3.") else version
 
 
-def _start(value: object) -> float | None:
-    if value is None:
+def _start(value: object, type_name: str) -> float | None:
+    if value is None or type_name in ("String", "Binary", "Clock"):
         return None
+    text = str(value).strip()
+    if type_name == "Boolean":
+        return 1.0 if text.lower() in ("true", "1") else 0.0
     try:
-        return float(str(value))
+        return float(text)
     except ValueError:
         return None
 
 
+def _variable(v: fmpy.model_description.ModelVariable) -> Variable:
+    unit = v.unit if v.unit else (getattr(v.declaredType, "unit", None) if v.declaredType else None)
+    shape = tuple(int(d.start) if d.start is not None else -1 for d in v.dimensions)
+    return Variable(
+        name=v.name,
+        value_reference=int(v.valueReference),
+        causality=v.causality,
+        variability=v.variability or "continuous",
+        start=_start(v.start, v.type),
+        unit=unit or None,
+        description=v.description or "",
+        type=v.type,
+        shape=shape,
+    )
+
+
 class FmuModel:
-    """An FMI 2.0 co-simulation FMU with a linux64 binary.
+    """An FMI 2.0 or 3.0 FMU (co-simulation or model exchange) with a linux x86-64 binary.
 
     Parameters
     ----------
     path
         The ``.fmu`` file.
+    interface
+        ``"CoSimulation"`` or ``"ModelExchange"``; default: co-simulation when the FMU has it
+        (its own solver, as its exporter tuned it), else model exchange.
 
     Attributes
     ----------
@@ -104,70 +187,157 @@ class FmuModel:
     sha256
         SHA-256 hex digest of the file.
     model_name, fmi_version, guid, model_identifier
-        From ``modelDescription.xml``.
+        From ``modelDescription.xml`` (``guid`` is the FMI 3.0 ``instantiationToken``).
+    interface
+        The FMI interface fmuid drives: ``CoSimulation`` or ``ModelExchange``.
     model_description
         fmpy's parsed model description.
     parameters, inputs, outputs
-        Real variables by name, in file order.
+        Variables of every type by name, in file order (see :attr:`Variable.kind` for which
+        types fmuid can use where).
 
     Raises
     ------
     FmuError
         If the file is not a zip archive, has entries escaping the extraction directory, is not
-        FMI 2.0, has no co-simulation interface or no ``binaries/linux64/<id>.so``.
+        FMI 2.0 or 3.0, lacks the requested interface or has no linux x86-64 binary.
 
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, interface: str | None = None) -> None:
         self.path = Path(path)
         names = _check_archive(self.path)
         self.sha256 = hashlib.sha256(self.path.read_bytes()).hexdigest()
         version = _fmi_version(self.path, names)
-        if version != "2.0":
-            raise FmuError(f"{self.path}: FMI version {version} is not supported (only 2.0)")
+        if version not in BINARY_DIR:
+            raise FmuError(
+                f"{self.path}: FMI version {version} is not supported (only 2.0 and 3.0)"
+            )
         try:
             description = fmpy.read_model_description(str(self.path))
         except Exception as exc:  # fmpy raises bare Exception, lxml and KeyError subclasses
-            raise FmuError(f"{self.path}: cannot read modelDescription.xml: {exc}") from exc
-        if description.coSimulation is None:
-            raise FmuError(f"{self.path}: the FMU has no co-simulation interface")
+            raise FmuError(
+                f"{self.path}: cannot read modelDescription.xml (FMI {version}): {exc}"
+            ) from exc
         self.model_description: ModelDescription = description
+        self.interface = _choose_interface(self.path, description, interface)
         self.model_name: str = description.modelName
-        self.fmi_version: str = description.fmiVersion
-        self.guid: str = description.guid
-        self.model_identifier: str = description.coSimulation.modelIdentifier
-        binary = f"binaries/linux64/{self.model_identifier}.so"
+        self.fmi_version: str = version
+        self.guid: str = description.guid or description.instantiationToken or ""
+        kind = description.coSimulation if self.is_cosimulation else description.modelExchange
+        self.model_identifier: str = kind.modelIdentifier
+        binary = f"{BINARY_DIR[version]}/{self.model_identifier}.so"
         if binary not in names:
-            raise FmuError(f"{self.path}: the FMU has no linux64 binary ({binary} is missing)")
+            raise FmuError(
+                f"{self.path}: the FMI {version} FMU has no linux x86-64 binary ({binary} is "
+                "missing; source-code-only FMUs are not compiled by fmuid)"
+            )
         self.parameters: dict[str, Variable] = {}
         self.inputs: dict[str, Variable] = {}
         self.outputs: dict[str, Variable] = {}
-        groups = {"parameter": self.parameters, "input": self.inputs, "output": self.outputs}
+        groups = {
+            "parameter": self.parameters,
+            "structuralParameter": self.parameters,
+            "input": self.inputs,
+            "output": self.outputs,
+        }
         for v in description.modelVariables:
             group = groups.get(v.causality)
-            if group is None:
-                continue
-            if v.type != "Real":
-                logger.info(
-                    "%s: %s variable %s ignored (only Real is supported)", self.path, v.type, v.name
-                )
-                continue
-            unit = v.unit if v.unit else (v.declaredType.unit if v.declaredType else None)
-            group[v.name] = Variable(
-                name=v.name,
-                value_reference=int(v.valueReference),
-                causality=v.causality,
-                variability=v.variability,
-                start=_start(v.start),
-                unit=unit or None,
-                description=v.description or "",
-            )
+            if group is not None:
+                group[v.name] = _variable(v)
+
+    @property
+    def is_cosimulation(self) -> bool:
+        """Whether fmuid drives the FMU's co-simulation interface (else model exchange)."""
+        return self.interface == CO_SIMULATION
 
     @property
     def can_interpolate_inputs(self) -> bool:
-        """Whether the FMU accepts first-order input derivatives (``canInterpolateInputs``)."""
-        return bool(self.model_description.coSimulation.canInterpolateInputs)
+        """Whether the FMU accepts first-order input derivatives (FMI 2.0 co-simulation)."""
+        cs = self.model_description.coSimulation
+        return self.is_cosimulation and self.fmi_version == "2.0" and bool(cs.canInterpolateInputs)
+
+    @property
+    def kind_label(self) -> str:
+        """E.g. ``FMI 3.0 model exchange``."""
+        name = "co-simulation" if self.is_cosimulation else "model exchange"
+        return f"FMI {self.fmi_version} {name}"
+
+    def usage_problems(
+        self,
+        free: Iterable[str],
+        fixed: Mapping[str, float | bool | str],
+        inputs: Iterable[str],
+        outputs: Iterable[str],
+    ) -> list[str]:
+        """Variables whose FMI type does not fit the role a study gives them.
+
+        Free parameters must be Real/Float; fixed values must suit their parameter's type
+        (text for a String, 0/1 for a Boolean, a whole number for an Integer or Enumeration);
+        inputs and outputs must be numeric scalars (Real/Float, Integer, Enumeration, Boolean).
+        Names the FMU does not have are left to the caller.
+
+        Returns
+        -------
+        list of str
+            One message per problem, each naming the field, the variable and its type.
+
+        """
+        problems = []
+        roles = (("parameters", free, self.parameters, ("float",)),
+                 ("inputs", inputs, self.inputs, USABLE["input"]),
+                 ("outputs", outputs, self.outputs, USABLE["output"]))  # fmt: skip
+        for field, names, table, kinds in roles:
+            for name in names:
+                v = table.get(name)
+                if v is not None and v.kind not in kinds:
+                    problems.append(
+                        f"{field}.{name}: '{name}' is {_article(v.type_label)} "
+                        f"{v.causality}, which fmuid cannot use there ({_ROLE_HELP[field]})"
+                    )
+        for name, value in fixed.items():
+            v = self.parameters.get(name)
+            if v is None:
+                continue
+            number = not isinstance(value, str | bool)
+            fits = {
+                "string": isinstance(value, str),
+                "float": number,
+                "integer": number and float(value).is_integer(),
+                "boolean": not isinstance(value, str) and value in (0, 1),
+            }.get(v.kind, False)
+            if not fits:
+                problems.append(
+                    f"fixed.{name}: '{name}' is {_article(v.type_label)} parameter; "
+                    f"{value!r} does not fit ({_FIXED_HELP.get(v.kind, 'it cannot be set')})"
+                )
+        return problems
 
     def __repr__(self) -> str:
         """Name, file and checksum prefix."""
         return f"FmuModel({self.model_name!r}, path={str(self.path)!r}, sha256={self.sha256[:12]})"
+
+
+def _article(word: str) -> str:
+    return ("an " if word[0].upper() in "AEIOU" else "a ") + word
+
+
+def _choose_interface(path: Path, description: ModelDescription, wanted: str | None) -> str:
+    available = [
+        name
+        for name, part in ((CO_SIMULATION, description.coSimulation),
+                           (MODEL_EXCHANGE, description.modelExchange))
+        if part is not None
+    ]  # fmt: skip
+    if wanted is not None and wanted not in (CO_SIMULATION, MODEL_EXCHANGE):
+        raise FmuError(f"unknown FMI interface {wanted!r}: use CoSimulation or ModelExchange")
+    if not available:
+        raise FmuError(
+            f"{path}: the FMU has neither a co-simulation nor a model-exchange interface "
+            "(scheduled execution is not supported)"
+        )
+    if wanted is None:
+        return available[0]
+    if wanted not in available:
+        raise FmuError(f"{path}: the FMU has no {wanted} interface (it has {available[0]})")
+    return wanted

@@ -1,8 +1,14 @@
-"""Fast repeated simulation of one FMI 2.0 co-simulation FMU (one instance, reset between runs)."""
+"""Repeated simulation of one FMU (FMI 2.0 or 3.0, co-simulation or model exchange).
+
+One instance per simulator, reset between runs; each run is a deterministic function of the
+parameters and inputs (no state carried over). The first successful run is repeated after a
+reset and compared with the run on the fresh instance: if they differ, the reset is taken as
+unreliable and every later run gets a fresh instance (the library is reloaded every
+:data:`RECYCLE_AFTER` instances, a limit some exporters have).
+"""
 
 from __future__ import annotations
 
-import ctypes
 import logging
 import os
 import shutil
@@ -11,36 +17,48 @@ import threading
 import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import fmpy
 import numpy as np
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
 
 from fmuid.errors import FmuError
-from fmuid.model.fmu import FmuModel
+from fmuid.model.channels import Channels
+from fmuid.model.cosim import run_cosimulation
+from fmuid.model.exchange import RTOL, run_model_exchange
+from fmuid.model.fmu import USABLE, FmuModel, Variable
+from fmuid.model.instance import Instance
+from fmuid.model.plan import RunPlan, make_plan
 
 logger = logging.getLogger(__name__)
 
-_STATUS = ("fmi2OK", "fmi2Warning", "fmi2Discard", "fmi2Error", "fmi2Fatal", "fmi2Pending")
-_TRUE = 1
+INPUT_STEP = 1e-3
+"""Default longest sub-step [s] over which a co-simulation FMU without input derivatives holds
+an input (the linear input is sampled at each sub-step's start)."""
+PLAN_CACHE = 32
+"""Run plans kept per simulator (one per experiment of a study, typically)."""
+RECYCLE_AFTER = 500
+"""Instances created before the library is reloaded, when the FMU's reset is unreliable."""
 
 
 class Simulator:
     """One instance of an FMU, simulated many times with different parameters and inputs.
 
-    The FMU is extracted once into a private temporary folder and instantiated once; every
-    :meth:`simulate` call starts with ``fmi2Reset``, so unset parameters keep their start values.
-
     Parameters
     ----------
     path
         The ``.fmu`` file.
+    interface
+        ``"CoSimulation"`` or ``"ModelExchange"``; default as :class:`FmuModel` chooses.
+    input_step
+        Longest sub-step [s] for co-simulation FMUs without input derivatives.
+
+    Attributes
+    ----------
+    model
+        The parsed FMU.
+    reset_reliable
+        None until the first run; then whether a reset run equals a fresh instance's run.
 
     Raises
     ------
@@ -49,114 +67,63 @@ class Simulator:
 
     """
 
-    def __init__(self, path: str | Path) -> None:
-        self.model = FmuModel(path)
+    def __init__(
+        self, path: str | Path, interface: str | None = None, input_step: float = INPUT_STEP
+    ) -> None:
+        self.model = FmuModel(path, interface)
         self.path = self.model.path
+        self.input_step = float(input_step)
         self._unzip_dir = tempfile.mkdtemp(prefix="fmuid-fmu-")
         self._cleanup = weakref.finalize(self, shutil.rmtree, self._unzip_dir, ignore_errors=True)
         fmpy.extract(str(self.path), unzipdir=self._unzip_dir)
-        self._messages: list[str] = []
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        cwd = os.getcwd()
-        try:
-            self._slave = FMU2Slave(
-                guid=self.model.guid,
-                unzipDirectory=self._unzip_dir,
-                modelIdentifier=self.model.model_identifier,
-                instanceName=self.model.model_name,
-            )
-            dll = self._slave.dll
-        except Exception as exc:  # fmpy raises bare Exception when the library does not load
-            raise FmuError(
-                f"FMU {self.path}: its binary for linux64 does not load: {exc}",
-                function="dlopen",
-            ) from exc
-        finally:
-            os.chdir(cwd)  # fmpy changes into the binary's folder and may not change back
-        self._reset = dll.fmi2Reset
-        self._setup = dll.fmi2SetupExperiment
-        self._enter = dll.fmi2EnterInitializationMode
-        self._exit = dll.fmi2ExitInitializationMode
-        self._set_real = dll.fmi2SetReal
-        self._get_real = dll.fmi2GetReal
-        self._set_der = dll.fmi2SetRealInputDerivatives
-        self._do_step = dll.fmi2DoStep
-        self._interpolate = self.model.can_interpolate_inputs
-        self._vr_cache: dict[tuple[str, ...], ctypes.Array[ctypes.c_uint]] = {}
-        self._component: int | None = None
-        self._instantiate()
+        self._instance = Instance(self.model, self._unzip_dir)
+        self._instance.instantiate()
+        self._fresh = True
+        self._terminated = False
+        self.reset_reliable: bool | None = None
+        self._channels: dict[tuple[str, ...], Channels] = {}
+        self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], RunPlan]] = {}
 
-    def _log(
-        self, env: object, instance: bytes, status: int, category: bytes, message: bytes
-    ) -> None:
-        text = message.decode(errors="replace") if message else ""
-        self._messages.append(text)
-        del self._messages[:-20]
-        logger.debug("%s [%s]: %s", self.model.model_name, _STATUS[status], text)
+    @property
+    def input_handling(self) -> str:
+        """How inputs reach this FMU between their samples (for results and logs)."""
+        if not self.model.is_cosimulation:
+            return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
+        if self.model.can_interpolate_inputs:
+            return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
+        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
 
-    def _instantiate(self) -> None:
-        try:
-            self._slave.instantiate(callbacks=self._callbacks)
-        except Exception as exc:  # fmpy raises bare Exception when fmi2Instantiate returns NULL
-            raise FmuError(
-                f"FMU {self.path}: fmi2Instantiate failed: {self._last_message()}",
-                function="fmi2Instantiate",
-                status="fmi2Error",
-            ) from exc
-        self._component = self._slave.component
-
-    def _last_message(self) -> str:
-        return self._messages[-1] if self._messages else "no message from the FMU"
-
-    def _fail(self, function: str, status: int, when: str) -> FmuError:
-        name = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
-        return FmuError(
-            f"FMU {self.model.model_name} ({self.path}): {function} returned {name} {when}: "
-            f"{self._last_message()}",
-            function=function,
-            status=name,
-        )
-
-    def _value_references(self, names: tuple[str, ...], kind: str) -> ctypes.Array[ctypes.c_uint]:
-        key = (kind, *names)
-        cached = self._vr_cache.get(key)
-        if cached is not None:
-            return cached
-        table = {
-            "parameter": self.model.parameters,
-            "input": self.model.inputs,
-            "output": self.model.outputs,
-        }[kind]
-        refs = []
+    def _variables(self, names: Sequence[str], role: str) -> list[Variable]:
+        table = {"parameter": self.model.parameters, "input": self.model.inputs,
+                 "output": self.model.outputs}[role]  # fmt: skip
+        found = []
         for name in names:
             variable = table.get(name)
             if variable is None:
                 raise FmuError(
-                    f"FMU {self.model.model_name} has no {kind} named {name!r}; "
-                    f"its {kind}s are: {', '.join(table) or 'none'}"
+                    f"FMU {self.model.model_name} has no {role} named {name!r}; "
+                    f"its {role}s are: {', '.join(table) or 'none'}"
                 )
-            refs.append(variable.value_reference)
-        array = (ctypes.c_uint * len(refs))(*refs)
-        self._vr_cache[key] = array
-        return array
+            if variable.kind not in USABLE[role]:
+                raise FmuError(
+                    f"FMU {self.model.model_name}: {role} {name!r} is of type "
+                    f"{variable.type_label}, which fmuid cannot use as {role} "
+                    f"(usable: {', '.join(USABLE[role])} scalars)"
+                )
+            found.append(variable)
+        return found
 
-    def _start_run(self) -> None:
-        self._messages.clear()
-        if self._component is None:
-            self._instantiate()
-        status = self._reset(self._component)
-        if status > 1:
-            logger.warning("%s: fmi2Reset failed; instantiating again", self.model.model_name)
-            self._slave.fmi2FreeInstance(self._component)
-            self._component = None
-            self._instantiate()
+    def _channels_for(self, names: tuple[str, ...], role: str) -> Channels:
+        key = (role, *names)
+        channels = self._channels.get(key)
+        if channels is None:
+            channels = Channels(self._variables(names, role), self.model.fmi_version)
+            self._channels[key] = channels
+        return channels
 
     def simulate(
         self,
-        params: Mapping[str, float],
+        params: Mapping[str, float | str],
         input_time: np.ndarray,
         input_values: Mapping[str, np.ndarray],
         output_time: np.ndarray,
@@ -164,14 +131,17 @@ class Simulator:
     ) -> np.ndarray:
         """Simulate once and return the outputs at the output times.
 
-        Inputs are linear between their samples (and held constant before the first and after
-        the last sample). The FMU steps over the sorted union of input sample times and output
-        times, starting at ``min(input_time[0], output_time[0])``.
+        Real (float) inputs are linear between their samples; discrete Real, Integer, Boolean and
+        Enumeration inputs hold each sample until the next; all are constant before the first
+        and after the last sample. The run starts at ``min(input_time[0], output_time[0])``; at
+        each output time the inputs of that time are set before the outputs are read (see
+        :attr:`input_handling`).
 
         Parameters
         ----------
         params
-            Parameter values by name; parameters not given keep their start values.
+            Parameter values by name (a String parameter takes text, a Boolean 0 or 1, an
+            Integer or Enumeration a whole number); parameters not given keep their start values.
         input_time
             Non-decreasing sample times of the inputs [s]; a repeated time makes a step.
         input_values
@@ -180,7 +150,7 @@ class Simulator:
             Times [s] at which outputs are read; the value at the start time is the one right
             after initialization.
         outputs
-            Names of FMU outputs.
+            Names of FMU outputs (Real/Float, Integer, Enumeration or Boolean as 0/1).
 
         Returns
         -------
@@ -190,140 +160,125 @@ class Simulator:
         Raises
         ------
         FmuError
-            On an unknown variable name or when an FMI call returns a status other than OK or
-            Warning (the message names the FMU, the function, the time and the FMU's message).
+            On an unknown variable name, a variable of a type fmuid cannot use there, a value
+            its type cannot hold, an FMI call that returns neither OK nor Warning (naming the
+            FMU, the function, the time and the FMU's message), or output times after the time
+            at which the FMU asked to stop.
         ValueError
             If the times or input arrays are malformed.
 
         """
-        t_in = np.asarray(input_time, dtype=float)
-        t_out = np.asarray(output_time, dtype=float)
-        if t_in.ndim != 1 or t_in.size == 0 or t_out.ndim != 1 or t_out.size == 0:
-            raise ValueError("input_time and output_time must be non-empty 1-d arrays")
-        if not (np.all(np.isfinite(t_in)) and np.all(np.isfinite(t_out))):
-            raise ValueError("input_time and output_time must be finite")
-        if np.any(np.diff(t_in) < 0):
-            raise ValueError("input_time must be non-decreasing")
-        in_names = tuple(input_values)
-        in_vr = self._value_references(in_names, "input")
-        out_vr = self._value_references(tuple(outputs), "output")
-        par_names = tuple(params)
-        par_vr = self._value_references(par_names, "parameter")
-        samples = np.empty((len(in_names), t_in.size))
-        for i, name in enumerate(in_names):
-            values = np.asarray(input_values[name], dtype=float)
-            if values.shape != t_in.shape:
-                raise ValueError(
-                    f"input {name!r} has shape {values.shape}, input_time has {t_in.shape}"
+        par = self._channels_for(tuple(params), "parameter")
+        inputs = self._channels_for(tuple(input_values), "input")
+        out = self._channels_for(tuple(outputs), "output")
+        plan = self._plan(input_time, input_values, inputs, output_time)
+        values = list(params.values())
+        result, stopped = self._run(values, plan, par, inputs, out)
+        if stopped is not None:
+            self._terminated = True
+        elif self.reset_reliable is None:
+            self._check_reset(result, values, plan, par, inputs, out)
+        if stopped is not None:
+            late = np.asarray(output_time, dtype=float) > stopped
+            if late.any():
+                raise FmuError(
+                    f"FMU {self.model.model_name} stopped the simulation at t = {stopped} s "
+                    f"(it asked to terminate), but outputs are wanted up to t = "
+                    f"{float(np.max(output_time))} s; give data only up to t = {stopped} s",
+                    function=f"{self._instance.prefix}"
+                    + ("DoStep" if self.model.is_cosimulation else "UpdateDiscreteStates"),
+                    status="terminateSimulation",
                 )
-            samples[i] = values
-
-        t0 = min(t_in[0], float(np.min(t_out)))
-        grid = np.unique(np.concatenate(([t0], t_in[t_in < t_out.max()], t_out)))
-        value, slope = _segments(t_in, samples, grid)
-        read_index = np.searchsorted(grid, t_out)
-        rows_at: list[list[int]] = [[] for _ in grid]
-        for row, k in enumerate(read_index.tolist()):
-            rows_at[k].append(row)
-
-        n_in, n_out = len(in_names), len(out_vr)
-        result = np.empty((t_out.size, n_out))
-        out_buf = (ctypes.c_double * n_out)()
-        out_view = np.ctypeslib.as_array(out_buf) if n_out else np.empty(0)
-        in_buf = (ctypes.c_double * n_in)()
-        der_buf = (ctypes.c_double * n_in)()
-        order = (ctypes.c_int * n_in)(*([1] * n_in))
-        c = self._component_for_run()
-
-        par_buf = (ctypes.c_double * len(par_names))(*(float(params[n]) for n in par_names))
-        if par_names and (status := self._set_real(c, par_vr, len(par_names), par_buf)) > 1:
-            raise self._fail("fmi2SetReal", status, "while setting the parameters")
-        for function, status in (
-            ("fmi2SetupExperiment", self._setup(c, 0, 0.0, t0, 0, 0.0)),
-            ("fmi2EnterInitializationMode", self._enter(c)),
-        ):
-            if status > 1:
-                raise self._fail(function, status, f"at t = {t0} s")
-        if n_in:
-            in_buf[:] = value[0].tolist()
-            if (status := self._set_real(c, in_vr, n_in, in_buf)) > 1:
-                raise self._fail("fmi2SetReal", status, f"for the inputs at t = {t0} s")
-        if (status := self._exit(c)) > 1:
-            raise self._fail("fmi2ExitInitializationMode", status, f"at t = {t0} s")
-
-        set_real, set_der, do_step, get_real = (
-            self._set_real,
-            self._set_der,
-            self._do_step,
-            self._get_real,
-        )
-        interpolate = self._interpolate and n_in > 0
-        times = grid.tolist()
-        values = value.tolist()
-        slopes = slope.tolist()
-        for k, t in enumerate(times):
-            rows = rows_at[k]
-            if rows:
-                if (status := get_real(c, out_vr, n_out, out_buf)) > 1:
-                    raise self._fail("fmi2GetReal", status, f"at t = {t} s")
-                result[rows] = out_view
-            if k + 1 == len(times):
-                break
-            if n_in:
-                in_buf[:] = values[k]
-                if (status := set_real(c, in_vr, n_in, in_buf)) > 1:
-                    raise self._fail("fmi2SetReal", status, f"for the inputs at t = {t} s")
-                if interpolate:
-                    der_buf[:] = slopes[k]
-                    if (status := set_der(c, in_vr, n_in, order, der_buf)) > 1:
-                        raise self._fail("fmi2SetRealInputDerivatives", status, f"at t = {t} s")
-            if (status := do_step(c, t, times[k + 1] - t, _TRUE)) > 1:
-                raise self._fail("fmi2DoStep", status, f"in the step from t = {t} s")
         return result
 
-    def _component_for_run(self) -> int:
-        self._start_run()
-        assert self._component is not None
-        return self._component
+    def _plan(
+        self,
+        input_time: np.ndarray,
+        input_values: Mapping[str, np.ndarray],
+        inputs: Channels,
+        output_time: np.ndarray,
+    ) -> RunPlan:
+        """Return the run's plan, reused while the same arrays come back with the same values.
+
+        A fit simulates each experiment many times with the same time and input arrays; the
+        plan costs about as much as a short run. The arrays are compared by value on every hit.
+        """
+        arrays = (input_time, output_time, *input_values.values())
+        key = (tuple(input_values), *map(id, arrays))
+        hit = self._plans.get(key)  # the arrays are kept alive there, so their ids are theirs
+        if hit is not None and all(map(np.array_equal, arrays, hit[1])):
+            return hit[2]
+        plan = make_plan(input_time, input_values, inputs.variables, output_time)
+        if len(self._plans) >= PLAN_CACHE:
+            self._plans.pop(next(iter(self._plans)))
+        copies = tuple(np.array(a, dtype=float, copy=True) for a in arrays)
+        self._plans[key] = (arrays, copies, plan)
+        return plan
+
+    def _check_reset(
+        self, first: np.ndarray, values: list[float | str], plan: RunPlan,
+        par: Channels, inputs: Channels, out: Channels,
+    ) -> None:  # fmt: skip
+        """Run again after a reset; an error or a different result marks the reset unreliable."""
+        try:
+            again, _ = self._run(values, plan, par, inputs, out)
+            self.reset_reliable = bool(np.array_equal(again, first, equal_nan=True))
+        except FmuError:
+            self.reset_reliable = False
+        if not self.reset_reliable:
+            logger.warning(
+                "%s: a run after fmi%sReset differs from a fresh instance's; every run now "
+                "gets a fresh instance", self.model.model_name, self.model.fmi_version[0],
+            )  # fmt: skip
+
+    def _start(self) -> Instance:
+        """Return an instance in the instantiated state: fresh, reset, or re-created.
+
+        After a run that the FMU terminated, the instance is re-created rather than reset
+        (some FMUs keep their terminate flag through a reset).
+        """
+        instance = self._instance
+        if self._fresh and instance.component is not None:
+            self._fresh = False
+            return instance
+        terminated, self._terminated = self._terminated, False
+        if self.reset_reliable is not False and not terminated and instance.component is not None:
+            if instance.reset():
+                return instance
+            logger.warning(
+                "%s: reset failed; every run now gets a fresh instance", self.model.model_name
+            )
+            self.reset_reliable = False
+        instance.free()
+        if instance.instantiations >= RECYCLE_AFTER:
+            instance.unload()
+            instance = self._instance = Instance(self.model, self._unzip_dir)
+        instance.instantiate()
+        return instance
+
+    def _run(
+        self, values: list[float | str], plan: RunPlan,
+        par: Channels, inputs: Channels, out: Channels,
+    ) -> tuple[np.ndarray, float | None]:  # fmt: skip
+        instance = self._start()
+        t0 = plan.times[0]
+        if par.size:
+            instance.set(par, values, None)
+        cosim = self.model.is_cosimulation
+        instance.enter_initialization(t0, None if cosim else RTOL)
+        if inputs.size:
+            instance.set(inputs, plan.value[0].tolist(), t0)
+        instance.call("ExitInitializationMode", when=f"at t = {t0} s")
+        if not cosim:
+            return run_model_exchange(instance, plan, inputs, out)
+        step = None if self.model.can_interpolate_inputs else self.input_step
+        return run_cosimulation(instance, plan, inputs, out, step)
 
     def close(self) -> None:
         """Free the FMU instance, unload its library and delete the extracted files."""
-        if self._component is not None:
-            self._slave.fmi2FreeInstance(self._component)
-            self._component = None
-            self._slave.freeLibrary()
+        if self._instance.component is not None:
+            self._instance.unload()
         self._cleanup()
-
-
-def _segments(
-    t_in: np.ndarray, samples: np.ndarray, grid: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Input values at each grid point and slopes over each grid interval.
-
-    Every input breakpoint inside the run is a grid point, so each interval lies in one segment
-    of the piecewise-linear input; the value at a grid point is the right limit.
-
-    Returns
-    -------
-    value, slope
-        Arrays of shape ``(len(grid), n_inputs)``; the slope is 0 outside the samples.
-
-    """
-    n = t_in.size
-    mid = np.append(0.5 * (grid[:-1] + grid[1:]), grid[-1])
-    j = np.searchsorted(t_in, mid, side="right") - 1
-    inside = (j >= 0) & (j < n - 1)
-    jc = np.clip(j, 0, max(n - 2, 0))
-    if n > 1:
-        dt = t_in[jc + 1] - t_in[jc]
-        rate = (samples[:, jc + 1] - samples[:, jc]) / np.where(dt > 0, dt, 1.0)
-        slope = np.where(inside, rate, 0.0)
-        base = samples[:, jc] + slope * (grid - t_in[jc])
-    else:
-        slope = np.zeros((samples.shape[0], grid.size))
-        base = samples[:, jc]
-    value = np.where(j < 0, samples[:, :1], np.where(j >= n - 1, samples[:, -1:], base))
-    return value.T.copy(), slope.T.copy()
 
 
 _CACHE: dict[tuple[str, int, int], Simulator] = {}
@@ -338,6 +293,16 @@ def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
     bytes travel with the work and are written to a local file once.
     """
     _ALIASES[str(path)] = local_copy
+
+
+def fmu_summary(path: str | Path) -> dict[str, str]:
+    """Say how fmuid runs the FMU at ``path``: FMI version, interface and input handling."""
+    simulator = get_simulator(path)
+    return {
+        "fmi_version": simulator.model.fmi_version,
+        "interface": simulator.model.interface,
+        "input_handling": simulator.input_handling,
+    }
 
 
 def get_simulator(path: str | Path) -> Simulator:

@@ -1,0 +1,163 @@
+"""The time grid of one run: where the master stops, what the inputs are there, what is read."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from fmuid.errors import FmuError
+from fmuid.model.fmu import Variable
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """Communication points of one run and the inputs at each of them.
+
+    Attributes
+    ----------
+    times
+        Sorted grid [s]: the start time, every input breakpoint inside the run, every output time.
+    value
+        Input values at each grid point (right limits), shape ``(len(times), n_inputs)``.
+    slope
+        Input slopes over each grid interval [unit/s]; zero for held (non-float) inputs.
+    input_time
+        The input sample times [s].
+    rows_at
+        For each grid point, the rows of the result read there.
+    n_rows
+        Number of output rows.
+
+    """
+
+    times: list[float]
+    value: np.ndarray
+    slope: np.ndarray
+    input_time: np.ndarray
+    rows_at: list[list[int]]
+    n_rows: int
+
+    @cached_property
+    def jump(self) -> np.ndarray:
+        """Whether some input is discontinuous at each grid point (its left limit differs)."""
+        steps = self.value[:-1] + self.slope[:-1] * np.diff(self.times)[:, None]
+        return np.any(np.vstack([self.value[:1], steps]) != self.value, axis=1)
+
+    @cached_property
+    def breakpoint(self) -> np.ndarray:
+        """Whether each grid point is an input sample time (the slopes may change there)."""
+        return np.isin(self.times, self.input_time)
+
+    @property
+    def stop(self) -> float:
+        """Last grid time [s]."""
+        return self.times[-1]
+
+
+def make_plan(
+    input_time: np.ndarray,
+    input_values: Mapping[str, np.ndarray],
+    inputs: Sequence[Variable],
+    output_time: np.ndarray,
+) -> RunPlan:
+    """Build the grid of a run from input samples and output times.
+
+    Continuous float inputs are linear between their samples; discrete ones and integer,
+    Boolean and enumeration inputs hold each sample's value until the next sample. All inputs
+    are constant before the first and after the last sample.
+
+    Raises
+    ------
+    ValueError
+        If the times or input arrays are malformed.
+    FmuError
+        If a non-float input gets a value its type cannot hold (naming input, type and time).
+
+    """
+    t_in = np.asarray(input_time, dtype=float)
+    t_out = np.asarray(output_time, dtype=float)
+    if t_in.ndim != 1 or t_in.size == 0 or t_out.ndim != 1 or t_out.size == 0:
+        raise ValueError("input_time and output_time must be non-empty 1-d arrays")
+    if not (np.all(np.isfinite(t_in)) and np.all(np.isfinite(t_out))):
+        raise ValueError("input_time and output_time must be finite")
+    if np.any(np.diff(t_in) < 0):
+        raise ValueError("input_time must be non-decreasing")
+    samples = np.empty((len(inputs), t_in.size))
+    for i, variable in enumerate(inputs):
+        values = np.asarray(input_values[variable.name], dtype=float)
+        if values.shape != t_in.shape:
+            raise ValueError(
+                f"input {variable.name!r} has shape {values.shape}, input_time has {t_in.shape}"
+            )
+        if not variable.is_continuous:
+            _check_kind(variable, values, t_in)
+        samples[i] = values
+    t0 = min(t_in[0], float(np.min(t_out)))
+    grid = np.unique(np.concatenate(([t0], t_in[t_in < t_out.max()], t_out)))
+    held = [i for i, v in enumerate(inputs) if not v.is_continuous]
+    value, slope = _segments(t_in, samples, grid)
+    if held:
+        hold = np.searchsorted(t_in, grid, side="right") - 1
+        value[:, held] = samples[held][:, np.maximum(hold, 0)].T
+        slope[:, held] = 0.0
+    rows_at: list[list[int]] = [[] for _ in grid]
+    for row, k in enumerate(np.searchsorted(grid, t_out).tolist()):
+        rows_at[k].append(row)
+    return RunPlan(grid.tolist(), value, slope, t_in, rows_at, t_out.size)
+
+
+def _check_kind(variable: Variable, values: np.ndarray, t_in: np.ndarray) -> None:
+    kind = variable.kind
+    if kind == "float":
+        return
+    if kind == "integer":
+        bad = np.flatnonzero(values != np.round(values))
+        need = "whole numbers"
+    elif kind == "boolean":
+        bad = np.flatnonzero((values != 0) & (values != 1))
+        need = "0 or 1 (false or true)"
+    else:
+        raise FmuError(
+            f"input {variable.name!r} is of type {variable.type_label}, which fmuid cannot "
+            "drive from a data column (inputs must be Real/Float, Integer, Boolean or "
+            "Enumeration scalars)"
+        )
+    if bad.size:
+        raise FmuError(
+            f"input {variable.name!r} ({variable.type_label}) takes {need}; got "
+            f"{float(values[bad[0]])!r} at t = {float(t_in[bad[0]])} s"
+        )
+
+
+def _segments(
+    t_in: np.ndarray, samples: np.ndarray, grid: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Input values at each grid point and slopes over each grid interval.
+
+    Every input breakpoint inside the run is a grid point, so each interval lies in one segment
+    of the piecewise-linear input; the value at a grid point is the right limit.
+
+    Returns
+    -------
+    value, slope
+        Arrays of shape ``(len(grid), n_inputs)``; the slope is 0 outside the samples.
+
+    """
+    n = t_in.size
+    mid = np.append(0.5 * (grid[:-1] + grid[1:]), grid[-1])
+    j = np.searchsorted(t_in, mid, side="right") - 1
+    inside = (j >= 0) & (j < n - 1)
+    jc = np.clip(j, 0, max(n - 2, 0))
+    if n > 1:
+        dt = t_in[jc + 1] - t_in[jc]
+        rate = (samples[:, jc + 1] - samples[:, jc]) / np.where(dt > 0, dt, 1.0)
+        slope = np.where(inside, rate, 0.0)
+        base = samples[:, jc] + slope * (grid - t_in[jc])
+    else:
+        slope = np.zeros((samples.shape[0], grid.size))
+        base = samples[:, jc]
+    value = np.where(j < 0, samples[:, :1], np.where(j >= n - 1, samples[:, -1:], base))
+    return value.T.copy(), slope.T.copy()
