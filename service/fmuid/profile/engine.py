@@ -232,17 +232,16 @@ def _assemble(
                 limited.update(_point(problem, index, end.point.z, end.point.chi2, None).at_bound)
     points = [p for _, p in reversed(walks[-1])] + [estimate_point] + [p for _, p in walks[1]]
     sim = (ends["simultaneous"][0], ends["simultaneous"][1])
-    why_open = (
-        open_reason([p for _, p in walks[-1]], float(problem.lower[index]))
-        if sim[0] is None
-        else "",
-        open_reason([p for _, p in walks[1]], float(problem.upper[index]))
-        if sim[1] is None
-        else "",
+    bounds = (float(problem.lower[index]), float(problem.upper[index]))
+    why_open = tuple(
+        open_reason([estimate_point] + [p for _, p in walks[d]], bounds[k])
+        if sim[k] is None
+        else ""
+        for k, d in enumerate((-1, 1))
     )
     flat = is_flat(points, fit.chi2, thr["simultaneous"])
     partners, meaning = _null_direction(problem, name, check, flat, walks)
-    status, reason = label(name, flat, sim, why_open, partners, meaning)
+    status, reason = label(name, flat, sim, (why_open[0], why_open[1]), partners, meaning)
     return ParameterProfile(
         name=name,
         estimate=fit.estimates[name],
