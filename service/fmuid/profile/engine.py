@@ -5,16 +5,18 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-from fmuid.fit.optimize import jacobian, make_fit_result, refine
+from fmuid.fit.optimize import FitOptions, jacobian, make_fit_result, refine
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import Cost, FitResult
 from fmuid.profile.branch import BranchResult
 from fmuid.profile.checks import check_fit, distinct_valleys
+from fmuid.profile.health import check_health
 from fmuid.profile.intervals import is_flat, label, open_reason
 from fmuid.profile.parallel import BranchTask, run_branches
 from fmuid.profile.points import WalkPoint
@@ -82,9 +84,15 @@ def profile_problem(
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
+    health = check_health(problem, fit.z_estimate(), fit.fisher_sd_z())
+    sims += health.simulations
+    if not health.smooth:
+        log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
+        refit = replace(options.refit, diff_step=health.diff_step, polish=True)
+        options = replace(options, refit=refit, checks=replace(options.checks, always=True))
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
-    if not fit.global_search and options.checks.fit_starts > 0:
+    if (not fit.global_search or not health.smooth) and options.checks.fit_starts > 0:
         sims0 = problem.simulations
         pool = check_fit(problem, options.checks, problem.spec.seed)
         fit_check["starts"] = len(pool)
@@ -96,7 +104,7 @@ def profile_problem(
             fit_check["lower_found"] = True
             better_found = True
             pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
-            fit = _refit(problem, best.z, fit)
+            fit = _refit(problem, best.z, fit, options.refit)
             sims += fit.cost.simulations
         fit_check["simulations"] = problem.simulations - sims0
         sims += problem.simulations - sims0
@@ -115,7 +123,7 @@ def profile_problem(
         best = min(better, key=lambda p: p.chi2)
         log.info("profile found chi2 %.6g below the optimum %.6g; refitting", best.chi2, fit.chi2)
         pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
-        fit = _refit(problem, best.z, fit)
+        fit = _refit(problem, best.z, fit, options.refit)
         sims += fit.cost.simulations
     check = structural_check(
         fit.jacobian, problem.names, problem.scales, [fit.estimates[n] for n in problem.names]
@@ -137,14 +145,14 @@ def profile_problem(
         better_optimum_found=better_found,
         structural_check=check,
         cost=Cost(sims, time.perf_counter() - t0 + fit.cost.seconds),
-        checks={"fit": fit_check},
+        checks={"health": health.to_dict(), "fit": fit_check},
     )
 
 
-def _refit(problem: Problem, z0: np.ndarray, fit: FitResult) -> FitResult:
-    """Refine from a lower point and return the new fit."""
+def _refit(problem: Problem, z0: np.ndarray, fit: FitResult, walk: FitOptions) -> FitResult:
+    """Refine from a lower point and return the new fit (polished when the walk's re-fits are)."""
     sims0, t_refit = problem.simulations, time.perf_counter()
-    z, chi2, message = refine(problem, z0)
+    z, chi2, message = refine(problem, z0, options=FitOptions(polish=walk.polish))
     jac = jacobian(problem, z)
     return make_fit_result(problem, z, chi2, jac, message, fit.global_search, t_refit, sims0)
 
