@@ -45,7 +45,7 @@ class CheckOptions:
     lower_tol: float = 2e-3
     max_rewalks: int = 3
     refit: FitOptions = field(
-        default_factory=lambda: FitOptions(ftol=1e-8, xtol=1e-8, gtol=1e-8, max_nfev=400)
+        default_factory=lambda: FitOptions(ftol=1e-6, xtol=1e-6, gtol=1e-6, max_nfev=150)
     )
 
 

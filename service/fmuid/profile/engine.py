@@ -51,10 +51,13 @@ def profile_problem(
 ) -> ProfileResult:
     """Profile likelihoods of the free parameters around a fit.
 
-    Every parameter is walked in both directions (branches run in parallel), its pointwise and
-    simultaneous confidence intervals are read where the profile crosses the thresholds, and it
-    is labelled. If a profile finds a lower chi2 than the optimum, the fit is refined from there
-    and the profiles are redone (``better_optimum_found``).
+    A health check of the objective comes first (non-smooth FMUs get larger finite-difference
+    steps, polished re-fits and checks at every end); a fit without global search is checked
+    from diverse starts (full studies only, ``only=None``). Every parameter is then walked in
+    both directions (branches run in parallel), its pointwise and simultaneous CI ends are
+    located by root-finding on re-fits, the ends are checked for a lower valley, and it is
+    labelled. If a profile finds a lower chi2 than the optimum, the fit is refined from there
+    and the profiles are redone (``better_optimum_found``). See ``docs/profiles.md``.
 
     Parameters
     ----------
@@ -63,7 +66,8 @@ def profile_problem(
     fit
         The best fit of ``problem``.
     only
-        Profile only these parameters (default: all free parameters).
+        Profile only these parameters (default: all free parameters; then the fit is also
+        checked from diverse starts when it had no global search).
     workers
         Local worker processes; 1 runs in this process.
     executor
@@ -71,7 +75,7 @@ def profile_problem(
     progress
         Receives ``Progress("profile", done, total, detail)`` after every point.
     options
-        Walk settings.
+        Walk, end and check settings.
 
     Returns
     -------
@@ -84,7 +88,7 @@ def profile_problem(
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
-    health = check_health(problem, fit.z_estimate(), fit.fisher_sd_z())
+    health = check_health(problem, fit.z_estimate(), fit.jacobian)
     sims += health.simulations
     if not health.smooth:
         log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
@@ -92,7 +96,7 @@ def profile_problem(
         options = replace(options, refit=refit, checks=replace(options.checks, always=True))
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
-    if (not fit.global_search or not health.smooth) and options.checks.fit_starts > 0:
+    if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
         sims0 = problem.simulations
         pool = check_fit(problem, options.checks, problem.spec.seed)
         fit_check["starts"] = len(pool)

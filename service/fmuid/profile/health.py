@@ -15,8 +15,11 @@ from fmuid.model.simulator import Simulator
 
 #: Relative step of the noise probe (scipy's default finite-difference step in fitted coordinates).
 PROBE_STEP = 1e-6
-#: Grid points on each side of the estimate along each parameter, spaced half a Fisher sd.
+#: Grid points on each side of the estimate along each parameter, each step raising chi2 by
+#: about a quarter when only that parameter moves (so the grid spans a chi2 rise of about 4)...
 GRID_SIDE = 4
+#: ...but no step longer than this fraction of the parameter's range (weakly sensitive ones).
+GRID_SPAN = 2e-3
 #: A finite-difference step must make the change of the residuals this many times their noise.
 SIGNAL_TO_NOISE = 1e3
 #: Largest finite-difference step (relative, fitted coordinates).
@@ -38,8 +41,9 @@ class Health:
         Per parameter: the noise of the weighted residuals under steps of ``PROBE_STEP``
         (fourth differences, Moré and Wild's ECnoise estimate), in units of sigma.
     jumps
-        Per parameter: points of a grid of half-Fisher-sd steps where chi2 departs from a
-        smooth (quartic) curve.
+        Per parameter: points of a grid along the parameter alone (steps of half its
+        conditional standard deviation, at most ``GRID_SPAN`` of its range) where chi2 departs
+        from a smooth (quartic) curve.
     diff_step
         The finite-difference step chosen for the re-fits (relative, fitted coordinates).
     simulations
@@ -77,7 +81,7 @@ class Health:
         }
 
 
-def check_health(problem: Problem, z_hat: np.ndarray, sd_z: dict[str, float]) -> Health:
+def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> Health:
     """Probe the objective around the estimate.
 
     Parameters
@@ -86,8 +90,9 @@ def check_health(problem: Problem, z_hat: np.ndarray, sd_z: dict[str, float]) ->
         The estimation problem.
     z_hat
         The estimate in fitted coordinates.
-    sd_z
-        Fisher standard deviation of each parameter in fitted coordinates (sets the grid).
+    jacobian
+        Weighted residual Jacobian at the estimate (fitted coordinates); its column norms set
+        the grid steps.
 
     Returns
     -------
@@ -112,7 +117,8 @@ def check_health(problem: Problem, z_hat: np.ndarray, sd_z: dict[str, float]) ->
         slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
         if noise[name] > 0 and slope > 0:
             steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
-        d = 0.5 * sd_z[name] if np.isfinite(sd_z[name]) else 1e-3 * (hi[i] - lo[i])
+        norm = float(np.linalg.norm(jacobian[:, i]))
+        d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
         grid = np.clip(z_hat[i] + d * np.arange(-GRID_SIDE, GRID_SIDE + 1), lo[i], hi[i])
         grid = np.unique(grid)
         chi2 = np.array(
