@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from scipy.optimize import least_squares
+from scipy.stats import qmc
 
 import fmuid
 from fmuid.stages import make_problem
@@ -65,3 +67,24 @@ def test_tractor_snr25_second_valley_ends(tractor_fmu):
     problem = make_problem(tractor_fmu, [data], s)
     assert_ends_exact(problem, result, ["C_atf", "C_atr"], kinds=("simultaneous",))
     assert result.parameters["C_atf"].quality.lower_valleys >= 1
+    assert not result.parameters["C_atf"].quality.unsettled
+
+
+@pytest.mark.slow
+def test_fit_without_global_search_is_checked(tractor_fmu):
+    """The optimum is the lowest of independent scipy fits from diverse starts."""
+    data, sigma = ramp_dataset(tractor_fmu, snr=16.67, seed=2, rate=10.0)
+    s = tire_spec(sigma)
+    problem = make_problem(tractor_fmu, [data], s)
+    result = fmuid.profile(tractor_fmu, [data], s, workers=2)
+    assert result.checks["fit"]["starts"] == 3
+    lo, hi = problem.z_lower, problem.z_upper
+    unit = qmc.LatinHypercube(d=problem.n_free, seed=np.random.default_rng(99)).random(6)
+    best = np.inf
+    for z0 in [problem.to_z_array(problem.start), *(lo + u * (hi - lo) for u in unit)]:
+        res = least_squares(
+            problem.residuals, z0, bounds=(lo, hi), method="trf", x_scale="jac", ftol=1e-10,
+            xtol=1e-10, gtol=1e-10,
+        )  # fmt: skip
+        best = min(best, 2.0 * res.cost)
+    assert result.chi2 <= best + 1e-3 * result.thresholds["simultaneous"]
