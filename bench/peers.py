@@ -48,7 +48,8 @@ def run_pypesto(problem: Problem, z_hat: np.ndarray, index: list[int], tuned: bo
     sims0 = problem.simulations
     names = list(problem.names)
     if tuned:
-        objective = FD(pypesto.Objective(res=problem.residuals), grad=True, sres=True)
+        chi2_half = pypesto.Objective(fun=lambda z: 0.5 * problem.chi2(z), res=problem.residuals)
+        objective = FD(chi2_half, grad=True, sres=True)
         optimizer = pypesto.optimize.ScipyOptimizer(method="ls_trf")
         options = pypesto.profile.ProfileOptions(
             ratio_min=0.5 * np.exp(-thr / 2.0),
@@ -60,11 +61,10 @@ def run_pypesto(problem: Problem, z_hat: np.ndarray, index: list[int], tuned: bo
         objective = FD(pypesto.Objective(fun=lambda z: 0.5 * problem.chi2(z)), grad=True)
         optimizer = pypesto.optimize.ScipyOptimizer()
         options = pypesto.profile.ProfileOptions()
-    pproblem = pypesto.Problem(objective, problem.z_lower, problem.z_upper, x_names=names)
-    result = pypesto.optimize.minimize(
-        pproblem, optimizer, n_starts=1, startpoint_method=lambda n, problem: z_hat[None, :],
-        progress_bar=False,
-    )  # fmt: skip
+    pproblem = pypesto.Problem(
+        objective, problem.z_lower, problem.z_upper, x_names=names, x_guesses=z_hat[None, :]
+    )
+    result = pypesto.optimize.minimize(pproblem, optimizer, n_starts=1, progress_bar=False)
     result = pypesto.profile.parameter_profile(
         pproblem, result, optimizer, profile_index=index, profile_options=options,
         progress_bar=False,
