@@ -2,7 +2,9 @@
 
 Prints, for SNR 1000 and 25: wall time, FMU simulations, simulations per profile point against a
 plain trust-region re-fit from scratch (the cost a profile point would have without warm starts),
-and the simultaneous CIs.
+the cost of the right-valley checks (the fit check from diverse starts and the checks at the CI
+ends, included in the total), the re-fits spent locating the CI ends exactly, and the
+simultaneous CIs with each profile's quality record.
 """
 
 from __future__ import annotations
@@ -73,7 +75,10 @@ def main() -> None:
     args = parser.parse_args()
     fmu = builtin_fmu("tractor_implement")
     print(f"tractor_implement, ramp 5 Hz 10 s, 6 tire parameters, {args.workers} workers")
-    print(f"{'SNR':>6} {'wall s':>8} {'sims':>7} {'points':>7} {'sims/pt':>8} {'refit sims':>11}")
+    print(
+        f"{'SNR':>6} {'wall s':>8} {'sims':>7} {'points':>7} {'sims/pt':>8} {'refit sims':>11}"
+        f" {'check sims':>11} {'end refits':>11}"
+    )
     rows = []
     for snr in args.snr:
         data, spec = dataset(fmu, snr, seed=1)
@@ -83,9 +88,13 @@ def main() -> None:
         points = sum(len(p.points) - 1 for p in result.parameters.values())
         profile_sims = result.cost.simulations - result.fit.cost.simulations
         scratch = refit_cost(fmu, data, spec, result)
+        checks = result.checks["fit"]["simulations"] + sum(
+            p.quality.check_simulations for p in result.parameters.values()
+        )
+        end_refits = sum(p.quality.end_refits for p in result.parameters.values())
         print(
             f"{snr:6g} {wall:8.2f} {result.cost.simulations:7d} {points:7d} "
-            f"{profile_sims / points:8.1f} {scratch:11.1f}"
+            f"{profile_sims / points:8.1f} {scratch:11.1f} {checks:11d} {end_refits:11d}"
         )
         rows.append((snr, result))
     for snr, result in rows:
@@ -93,7 +102,12 @@ def main() -> None:
         for name, p in result.parameters.items():
             lo, hi = p.ci_simultaneous
             fmt = lambda v: "null" if v is None else f"{v:.5g}"  # noqa: E731
-            print(f"  {name:7s} {p.estimate:12.5g}  [{fmt(lo)}, {fmt(hi)}]  {p.status}")
+            q = p.quality
+            print(
+                f"  {name:7s} {p.estimate:12.5g}  [{fmt(lo)}, {fmt(hi)}]  {p.status}"
+                f"  checks {q.checks}, jumps {q.jumps}, lower valleys {q.lower_valleys},"
+                f" re-walks {q.rewalks}{', UNSETTLED' if q.unsettled else ''}"
+            )
 
 
 if __name__ == "__main__":

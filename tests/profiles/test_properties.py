@@ -1,7 +1,11 @@
-"""Invariants of every profile result (hypothesis over noise draws and noise levels)."""
+"""Invariants of every profile result (hypothesis over noise draws and noise levels).
+
+Hypothesis runs derandomized so that CI gives the same verdict every time; the example that
+once failed (the estimate's profile point one ulp off the estimate) is always run.
+"""
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import fmuid
@@ -10,9 +14,13 @@ from .test_msd import msd_step_data, spec
 
 
 @settings(
-    max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=6,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 @given(seed=st.integers(0, 10_000), sigma=st.sampled_from([0.05, 0.2, 0.8]))
+@example(seed=116, sigma=0.8)
 def test_profile_invariants(msd_fmu, seed, sigma):
     truth = {"m": 1.1, "k": 4.4, "b": 1.6}
     data = msd_step_data(**truth, sigma=sigma, seed=seed)
@@ -21,6 +29,7 @@ def test_profile_invariants(msd_fmu, seed, sigma):
         at_estimate = [q for q in p.points if q.value == p.estimate]
         assert len(at_estimate) == 1
         assert at_estimate[0].chi2 == res.chi2
+        assert at_estimate[0].params == {n: v for n, v in res.fit.estimates.items() if n != name}
         assert all(q.chi2 >= res.chi2 - 1e-6 for q in p.points if q.error is None)
         values = [q.value for q in p.points]
         assert values == sorted(values)

@@ -11,7 +11,7 @@ import numpy as np
 from pymoo.algorithms.soo.nonconvex.ga import GA
 from pymoo.core.problem import Problem as PymooProblem
 from pymoo.optimize import minimize as pymoo_minimize
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, minimize
 
 from fmuid.errors import FmuError
 from fmuid.fit.problem import Problem
@@ -39,6 +39,9 @@ class FitOptions:
         Cap on residual evaluations of one trust-region run (``None``: 100 (n + 1)).
     diff_step
         Relative finite-difference step of the Jacobian in fitted coordinates.
+    polish
+        After the trust-region run, polish with Powell's derivative-free method (for
+        objectives with jumps, where finite differences mislead).
 
     """
 
@@ -49,6 +52,7 @@ class FitOptions:
     gtol: float = 1e-10
     max_nfev: int | None = None
     diff_step: float = 1e-6
+    polish: bool = False
 
 
 def safe_residuals(problem: Problem, z: np.ndarray) -> np.ndarray:
@@ -118,8 +122,19 @@ def refine(
     )
     if np.all(res.fun == FAILED_RESIDUAL):
         raise FmuError(f"{problem.fmu_path.name}: the simulation failed at every trial point")
-    z_full[free] = res.x
-    return z_full, float(2.0 * res.cost), str(res.message)
+    x, chi2, message = res.x, float(2.0 * res.cost), str(res.message)
+    if options.polish:
+        pol = minimize(
+            lambda xx: float(np.sum(fun(xx) ** 2)),
+            x,
+            method="Powell",
+            bounds=list(zip(lo, hi, strict=True)),
+            options={"xtol": 1e-6, "ftol": 1e-10, "maxfev": 60 * n_free},
+        )
+        if pol.fun < chi2:
+            x, chi2, message = pol.x, float(pol.fun), f"{message}; polished (Powell)"
+    z_full[free] = x
+    return z_full, chi2, message
 
 
 class _GaProblem(PymooProblem):

@@ -5,19 +5,24 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-from fmuid.fit.optimize import jacobian, make_fit_result, refine
+from fmuid.fit.optimize import FitOptions, jacobian, make_fit_result, refine
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import Cost, FitResult
-from fmuid.profile.intervals import ci_end, label
+from fmuid.profile.branch import BranchResult
+from fmuid.profile.checks import check_fit, distinct_valleys
+from fmuid.profile.health import check_health
+from fmuid.profile.intervals import is_flat, label, open_reason
 from fmuid.profile.parallel import BranchTask, run_branches
-from fmuid.profile.result import ParameterProfile, ProfilePoint, ProfileResult
+from fmuid.profile.points import WalkPoint
+from fmuid.profile.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
 from fmuid.profile.structural import structural_check
-from fmuid.profile.walk import BranchResult, WalkOptions
+from fmuid.profile.walk import WalkOptions
 from fmuid.progress import Progress, ProgressCallback
 
 log = logging.getLogger(__name__)
@@ -46,10 +51,13 @@ def profile_problem(
 ) -> ProfileResult:
     """Profile likelihoods of the free parameters around a fit.
 
-    Every parameter is walked in both directions (branches run in parallel), its pointwise and
-    simultaneous confidence intervals are read where the profile crosses the thresholds, and it
-    is labelled. If a profile finds a lower chi2 than the optimum, the fit is refined from there
-    and the profiles are redone (``better_optimum_found``).
+    A health check of the objective comes first (non-smooth FMUs get larger finite-difference
+    steps, polished re-fits and checks at every end); a fit without global search is checked
+    from diverse starts (full studies only, ``only=None``). Every parameter is then walked in
+    both directions (branches run in parallel), its pointwise and simultaneous CI ends are
+    located by root-finding on re-fits, the ends are checked for a lower valley, and it is
+    labelled. If a profile finds a lower chi2 than the optimum, the fit is refined from there
+    and the profiles are redone (``better_optimum_found``). See ``docs/profiles.md``.
 
     Parameters
     ----------
@@ -58,7 +66,8 @@ def profile_problem(
     fit
         The best fit of ``problem``.
     only
-        Profile only these parameters (default: all free parameters).
+        Profile only these parameters (default: all free parameters; then the fit is also
+        checked from diverse starts when it had no global search).
     workers
         Local worker processes; 1 runs in this process.
     executor
@@ -66,7 +75,7 @@ def profile_problem(
     progress
         Receives ``Progress("profile", done, total, detail)`` after every point.
     options
-        Walk settings.
+        Walk, end and check settings.
 
     Returns
     -------
@@ -79,9 +88,36 @@ def profile_problem(
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
+    health = check_health(problem, fit.z_estimate(), fit.jacobian)
+    sims += health.simulations
+    if not health.smooth:
+        log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
+        refit = replace(options.refit, diff_step=health.diff_step, polish=True)
+        options = replace(options, refit=refit, checks=replace(options.checks, always=True))
+    pool: list[WalkPoint] = []
+    fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
+    if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
+        sims0 = problem.simulations
+        pool = check_fit(problem, options.checks, problem.spec.seed)
+        fit_check["starts"] = len(pool)
+        best = min(pool, key=lambda p: p.chi2, default=None)
+        if best is not None and best.chi2 < fit.chi2 - options.better_tol * max(
+            1.0, thr["simultaneous"]
+        ):
+            log.info("the fit check found chi2 %.6g below the fit's %.6g", best.chi2, fit.chi2)
+            fit_check["lower_found"] = True
+            better_found = True
+            pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
+            fit = _refit(problem, best.z, fit, options.refit)
+            sims += fit.cost.simulations
+        fit_check["simulations"] = problem.simulations - sims0
+        sims += problem.simulations - sims0
     for _ in range(MAX_RESTARTS + 1):
+        valleys = distinct_valleys(
+            pool, problem, WalkPoint(fit.z_estimate(), fit.chi2), fit.chi2 + thr["simultaneous"]
+        )
         branches, branch_sims = _walk_all(
-            problem, fit, names, thr, workers, executor, progress, options
+            problem, fit, names, thr, workers, executor, progress, options, valleys
         )
         sims += branch_sims
         better = [b.better for b in branches if b.better is not None]
@@ -90,21 +126,21 @@ def profile_problem(
         better_found = True
         best = min(better, key=lambda p: p.chi2)
         log.info("profile found chi2 %.6g below the optimum %.6g; refitting", best.chi2, fit.chi2)
-        sims0, t_refit = problem.simulations, time.perf_counter()
-        z, chi2, message = refine(problem, best.z)
-        jac = jacobian(problem, z)
-        fit = make_fit_result(problem, z, chi2, jac, message, fit.global_search, t_refit, sims0)
+        pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
+        fit = _refit(problem, best.z, fit, options.refit)
         sims += fit.cost.simulations
-    z_hat = fit.z_estimate()
-    sd = fit.fisher_sd_z()
-    profiles = {}
-    for name in names:
-        i = problem.names.index(name)
-        sides = [b for b in branches if b.index == i]
-        profiles[name] = _assemble(problem, fit, i, z_hat, sides, thr, sd[name])
     check = structural_check(
         fit.jacobian, problem.names, problem.scales, [fit.estimates[n] for n in problem.names]
     )
+    sd = fit.fisher_sd_z()
+    profiles = {}
+    s0 = problem.simulations
+    for name in names:
+        i = problem.names.index(name)
+        sides = [b for b in branches if b.index == i]
+        profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check)
+    sims += problem.simulations - s0
+    fit_check["valleys"] = len(valleys)
     return ProfileResult(
         fit=fit,
         confidence=conf,
@@ -113,7 +149,16 @@ def profile_problem(
         better_optimum_found=better_found,
         structural_check=check,
         cost=Cost(sims, time.perf_counter() - t0 + fit.cost.seconds),
+        checks={"health": health.to_dict(), "fit": fit_check},
     )
+
+
+def _refit(problem: Problem, z0: np.ndarray, fit: FitResult, walk: FitOptions) -> FitResult:
+    """Refine from a lower point and return the new fit (polished when the walk's re-fits are)."""
+    sims0, t_refit = problem.simulations, time.perf_counter()
+    z, chi2, message = refine(problem, z0, options=FitOptions(polish=walk.polish))
+    jac = jacobian(problem, z)
+    return make_fit_result(problem, z, chi2, jac, message, fit.global_search, t_refit, sims0)
 
 
 def _walk_all(
@@ -125,16 +170,19 @@ def _walk_all(
     executor: Any,
     progress: ProgressCallback | None,
     options: WalkOptions,
+    valleys: Sequence[np.ndarray],
 ) -> tuple[list[BranchResult], int]:
     z_hat = fit.z_estimate()
     sd = fit.fisher_sd_z()
+    seed = problem.spec.seed
     tasks = [
         BranchTask(
-            problem, z_hat, fit.chi2, problem.names.index(n), d, thr["simultaneous"], sd[n], options
+            problem, z_hat, fit.chi2, problem.names.index(n), d, thr["simultaneous"], sd[n],
+            options, pointwise=thr["pointwise"], valleys=tuple(valleys), seed=seed,
         )
         for n in names
         for d in (-1, 1)
-    ]
+    ]  # fmt: skip
     expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
     done: dict[tuple[int, int], int] = {}
 
@@ -161,45 +209,97 @@ def _assemble(
     problem: Problem,
     fit: FitResult,
     index: int,
-    z_hat: np.ndarray,
     sides: list[BranchResult],
     thr: dict[str, float],
     sd_z: float,
+    check: dict[str, Any],
 ) -> ParameterProfile:
     name = problem.names[index]
-    estimate_point = _point(problem, index, z_hat, fit.chi2, None)
+    estimate_point = ProfilePoint(
+        value=fit.estimates[name],
+        chi2=float(fit.chi2),
+        params={n: v for n, v in fit.estimates.items() if n != name},
+        at_bound=_point(problem, index, fit.z_estimate(), fit.chi2, None).at_bound,
+    )
     by_dir = {b.direction: b for b in sides}
-    walks = {
-        d: [(p.z[index], _point(problem, index, p.z, p.chi2, p.error)) for p in by_dir[d].points]
-        if d in by_dir
-        else []
-        for d in (-1, 1)
-    }
-    start = [(float(z_hat[index]), estimate_point)]
-    ends: dict[str, tuple[float | None, float | None]] = {}
+    walks: dict[int, list[tuple[float, ProfilePoint]]] = {}
+    ends: dict[str, list[float | None]] = {"pointwise": [None, None], "simultaneous": [None, None]}
     limited: set[str] = set()
-    for kind in ("pointwise", "simultaneous"):
-        lo_z, lo_lim = ci_end(start + walks[-1], fit.chi2, thr[kind])
-        hi_z, hi_lim = ci_end(start + walks[1], fit.chi2, thr[kind])
-        ends[kind] = (_value(problem, index, lo_z), _value(problem, index, hi_z))
-        if kind == "simultaneous":
-            limited.update(lo_lim if lo_z is not None else ())
-            limited.update(hi_lim if hi_z is not None else ())
+    quality = ProfileQuality()
+    for k, d in enumerate((-1, 1)):
+        branch = by_dir.get(d)
+        if branch is None:
+            walks[d] = []
+            continue
+        quality = quality + branch.quality
+        extra = [e.point for e in branch.ends.values() if e.point is not None]
+        pts = {float(p.z[index]): p for p in branch.points + extra}
+        walks[d] = sorted(
+            ((z, _point(problem, index, p.z, p.chi2, p.error)) for z, p in pts.items()),
+            key=lambda zp: abs(zp[0] - fit.z_estimate()[index]),
+        )
+        for kind, end in branch.ends.items():
+            ends[kind][k] = _value(problem, index, end.z)
+            if kind == "simultaneous" and end.point is not None:
+                limited.update(_point(problem, index, end.point.z, end.point.chi2, None).at_bound)
     points = [p for _, p in reversed(walks[-1])] + [estimate_point] + [p for _, p in walks[1]]
-    status = label(points, fit.chi2, thr["simultaneous"], ends["simultaneous"])
+    sim = (ends["simultaneous"][0], ends["simultaneous"][1])
+    bounds = (float(problem.lower[index]), float(problem.upper[index]))
+    why_open = tuple(
+        open_reason([estimate_point] + [p for _, p in walks[d]], bounds[k])
+        if sim[k] is None
+        else ""
+        for k, d in enumerate((-1, 1))
+    )
+    flat = is_flat(points, fit.chi2, thr["simultaneous"])
+    partners, meaning = _null_direction(problem, name, check, flat, walks)
+    status, reason = label(name, flat, sim, (why_open[0], why_open[1]), partners, meaning)
     return ParameterProfile(
         name=name,
         estimate=fit.estimates[name],
         lower=float(problem.lower[index]),
         upper=float(problem.upper[index]),
         scale=problem.scales[index],
-        ci_simultaneous=ends["simultaneous"],
-        ci_pointwise=ends["pointwise"],
+        ci_simultaneous=sim,
+        ci_pointwise=(ends["pointwise"][0], ends["pointwise"][1]),
         status=status,
         points=tuple(points),
         limited_by=tuple(sorted(limited)),
         fisher_sd_z=sd_z,
+        status_reason=reason,
+        quality=quality,
     )
+
+
+def _null_direction(
+    problem: Problem,
+    name: str,
+    check: dict[str, Any],
+    flat: bool,
+    walks: dict[int, list[tuple[float, ProfilePoint]]],
+) -> tuple[list[str] | None, str]:
+    """Find a null direction of the noise-free sensitivities that involves ``name``.
+
+    Looked for at the estimate and, for a flat profile, at the outermost good points of its
+    profile. Returns the other parameters of the direction and its meaning, or ``(None, "")``.
+    """
+    combos = list(check["non_identifiable_combinations"])
+    if flat and not any(name in c["parameters"] for c in combos):
+        for side in walks.values():
+            ok = [p for _, p in side if p.error is None and np.isfinite(p.chi2)]
+            if not ok:
+                continue
+            values = {name: ok[-1].value, **ok[-1].params}
+            z = problem.to_z(values)
+            local = structural_check(
+                jacobian(problem, z), problem.names, problem.scales,
+                [values[n] for n in problem.names],
+            )  # fmt: skip
+            combos += local["non_identifiable_combinations"]
+    for c in combos:
+        if name in c["parameters"]:
+            return [n for n in c["parameters"] if n != name], str(c["meaning"])
+    return None, ""
 
 
 def _point(

@@ -18,7 +18,8 @@ import numpy as np
 
 from fmuid.fit.problem import Problem
 from fmuid.model.simulator import register_fmu_copy
-from fmuid.profile.walk import BranchResult, WalkOptions, walk_branch
+from fmuid.profile.branch import BranchResult, settle_branch
+from fmuid.profile.walk import WalkOptions
 
 _PROGRESS_QUEUE: Any = None
 
@@ -35,18 +36,28 @@ class BranchTask:
     threshold: float
     sd_z: float
     options: WalkOptions
+    pointwise: float | None = None
+    valleys: tuple[np.ndarray, ...] = ()
+    thorough: bool = False
+    seed: int = 0
 
     def walk(self, on_point: Callable[[int], None]) -> BranchResult:
-        """Walk the branch, calling ``on_point`` with the points done after each point."""
-        return walk_branch(
+        """Walk and settle the branch, calling ``on_point`` with the walk points done."""
+        thresholds = {"simultaneous": self.threshold}
+        if self.pointwise is not None:
+            thresholds["pointwise"] = self.pointwise
+        return settle_branch(
             self.problem,
             self.z_hat,
             self.chi2_hat,
             self.index,
             self.direction,
-            self.threshold,
+            thresholds,
             self.sd_z,
             self.options,
+            valleys=self.valleys,
+            thorough=self.thorough,
+            seed=self.seed,
             on_point=on_point,
         )
 

@@ -51,6 +51,69 @@ class ProfilePoint:
 
 
 @dataclass(frozen=True)
+class ProfileQuality:
+    """How a profile was checked (contract: ``quality``), summed over its branches.
+
+    Attributes
+    ----------
+    checks
+        Right-valley checks made (re-fits of the other parameters from several starts at a CI
+        end or a jump).
+    starts
+        Starts tried in those checks.
+    jumps
+        Points where the profile jumped, dropped or bent unexpectedly.
+    lower_valleys
+        Checks that found a lower chi2 than the walk.
+    rewalks
+        Stretches re-walked from a lower valley.
+    end_refits
+        Re-fits spent locating the CI ends by root-finding.
+    unsettled
+        Why the tool could not settle the profile (empty when it could).
+    check_simulations
+        Simulations spent on the checks.
+
+    """
+
+    checks: int = 0
+    starts: int = 0
+    jumps: int = 0
+    lower_valleys: int = 0
+    rewalks: int = 0
+    end_refits: int = 0
+    unsettled: tuple[str, ...] = ()
+    check_simulations: int = 0
+
+    def __add__(self, other: ProfileQuality) -> ProfileQuality:
+        """Combine the records of two branches."""
+        return ProfileQuality(
+            self.checks + other.checks,
+            self.starts + other.starts,
+            self.jumps + other.jumps,
+            self.lower_valleys + other.lower_valleys,
+            self.rewalks + other.rewalks,
+            self.end_refits + other.end_refits,
+            self.unsettled + other.unsettled,
+            self.check_simulations + other.check_simulations,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the record."""
+        return {
+            "checks": self.checks,
+            "starts": self.starts,
+            "jumps": self.jumps,
+            "lower_valleys": self.lower_valleys,
+            "rewalks": self.rewalks,
+            "end_refits": self.end_refits,
+            "unsettled": bool(self.unsettled),
+            "unsettled_reasons": list(self.unsettled),
+            "check_simulations": self.check_simulations,
+        }
+
+
+@dataclass(frozen=True)
 class ParameterProfile:
     """Profile, intervals and label of one free parameter.
 
@@ -69,6 +132,8 @@ class ParameterProfile:
     points: tuple[ProfilePoint, ...]
     limited_by: tuple[str, ...] = ()
     fisher_sd_z: float = float("inf")
+    status_reason: str = ""
+    quality: ProfileQuality = ProfileQuality()
 
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the parameter's entry."""
@@ -81,6 +146,8 @@ class ParameterProfile:
                 "pointwise": [_num(v) for v in self.ci_pointwise],
             },
             "status": self.status,
+            "status_reason": self.status_reason,
+            "quality": self.quality.to_dict(),
             "profile": [p.to_dict() for p in self.points],
         }
         if self.limited_by:
@@ -100,6 +167,7 @@ class ProfileResult:
     structural_check: dict[str, Any]
     cost: Cost
     extra: dict[str, Any] = field(default_factory=dict)
+    checks: dict[str, Any] = field(default_factory=dict)
 
     @property
     def chi2(self) -> float:
@@ -119,6 +187,7 @@ class ProfileResult:
             "parameters": {n: p.to_dict() for n, p in self.parameters.items()},
             "better_optimum_found": self.better_optimum_found,
             "structural_check": self.structural_check,
+            "checks": self.checks,
             "cost": self.cost.to_dict(),
         }
 

@@ -1,4 +1,4 @@
-"""One branch of a profile likelihood: one parameter walked in one direction (Raue et al. 2009)."""
+"""The walk of a profile branch: one parameter stepped in one direction (Raue et al. 2009)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,8 @@ import numpy as np
 from fmuid.errors import FmuidError
 from fmuid.fit.optimize import FitOptions, refine
 from fmuid.fit.problem import Problem
+from fmuid.profile.checks import CheckOptions
+from fmuid.profile.points import WalkPoint
 
 log = logging.getLogger(__name__)
 
@@ -36,12 +38,16 @@ class WalkOptions:
     better_tol
         A chi2 this much below the optimum counts as a better optimum.
     refit
-        Tolerances of the re-fit of the other parameters at each point.
+        Tolerances of the re-fit of the other parameters at each point (and at the ends).
+    end_tolerance
+        CI ends are located to this fraction of their half-width.
+    checks
+        Settings of the right-valley checks at the ends and jumps.
 
     """
 
     rise_per_step: float = 0.15
-    margin: float = 0.25
+    margin: float = 0.0
     min_step: float = 1e-4
     max_step: float = 0.08
     max_rise: float = 3.0
@@ -53,58 +59,49 @@ class WalkOptions:
             ftol=1e-6, xtol=1e-6, gtol=1e-6, diff_step=1e-6, max_nfev=150
         )
     )
+    end_tolerance: float = 1e-3
+    checks: CheckOptions = field(default_factory=CheckOptions)
 
 
-@dataclass(frozen=True)
-class WalkPoint:
-    """A point of a branch in fitted coordinates (``z`` holds every free parameter)."""
-
-    z: np.ndarray
-    chi2: float
-    error: str | None = None
+def first_step(sd_z: float, threshold: float, span: float, options: WalkOptions) -> float:
+    """First step from the estimate: the quadratic (Fisher) guess for the target rise."""
+    target = options.rise_per_step * threshold
+    step = np.sqrt(target) * sd_z if np.isfinite(sd_z) else options.max_step * span
+    return float(np.clip(step, options.min_step * span, options.max_step * span))
 
 
-@dataclass(frozen=True)
-class BranchResult:
-    """The points of one branch, from the estimate outwards (estimate not included)."""
-
-    index: int
-    direction: int
-    points: list[WalkPoint]
-    better: WalkPoint | None
-    simulations: int
-
-
-def walk_branch(
+def walk(
     problem: Problem,
-    z_hat: np.ndarray,
+    path: list[WalkPoint],
     chi2_hat: float,
     index: int,
     direction: int,
     threshold: float,
-    sd_z: float,
+    step: float,
     options: WalkOptions = WalkOptions(),
     on_point: Callable[[int], None] | None = None,
-) -> BranchResult:
-    """Walk parameter ``index`` from the estimate in ``direction`` (+1 or -1).
+) -> tuple[list[WalkPoint], WalkPoint | None]:
+    """Walk parameter ``index`` outwards in ``direction`` (+1 or -1) from the end of ``path``.
 
     At each point the profiled parameter is fixed and the others are re-fitted, warm-started
     from a linear extrapolation of their path over the last two points. The step aims at a
-    chi2 rise of ``rise_per_step * threshold``, starting from the quadratic (Fisher)
-    approximation ``sd_z`` and adapted from the rise actually seen.
+    chi2 rise of ``rise_per_step * threshold``, starting from ``step`` and adapted from the
+    rise actually seen; a step that overshoots is retried shorter.
 
     Parameters
     ----------
     problem
         The estimation problem (its FMU instance is per process).
-    z_hat, chi2_hat
-        The optimum in fitted coordinates and its chi2.
+    path
+        The good points so far, from the estimate outwards (at least the estimate).
+    chi2_hat
+        Chi2 at the optimum.
     index, direction
         Which parameter, and which way.
     threshold
         The simultaneous chi2 threshold; the walk ends past ``threshold * (1 + margin)``.
-    sd_z
-        Asymptotic standard deviation of the parameter in fitted coordinates (may be inf).
+    step
+        The first step in fitted coordinates.
     options
         Step settings.
     on_point
@@ -112,22 +109,23 @@ def walk_branch(
 
     Returns
     -------
-    BranchResult
+    points, better
+        The new points (failed ones included) and the first point below the optimum, if any
+        (the walk stops there).
 
     """
-    sims0 = problem.simulations
     lo, hi = problem.z_lower[index], problem.z_upper[index]
     span = hi - lo
     free = np.ones(problem.n_free, bool)
     free[index] = False
     target = options.rise_per_step * threshold
-    step = np.sqrt(target) * sd_z if np.isfinite(sd_z) else options.max_step * span
-    step = float(np.clip(step, options.min_step * span, options.max_step * span))
-    path: list[WalkPoint] = [WalkPoint(z_hat.copy(), chi2_hat)]
+    path = list(path)
     points: list[WalkPoint] = []
     failures = 0
     retries = 0
-    last_ok = path[0]
+    last_ok = path[-1]
+    if last_ok.chi2 - chi2_hat > threshold * (1.0 + options.margin):
+        return points, None
     while len(points) < options.max_points:
         zi = last_ok.z[index] + direction * step
         at_edge = zi <= lo or zi >= hi
@@ -155,7 +153,7 @@ def walk_branch(
             continue
         failures = 0
         if point.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
-            return BranchResult(index, direction, points, point, problem.simulations - sims0)
+            return points, point
         rise = point.chi2 - last_ok.chi2
         if rise > options.max_rise * target and step > options.min_step * span and retries < 8:
             points.pop()
@@ -173,7 +171,7 @@ def walk_branch(
                 step * np.clip(factor, 0.5, 2.0), options.min_step * span, options.max_step * span
             )
         )
-    return BranchResult(index, direction, points, None, problem.simulations - sims0)
+    return points, None
 
 
 def _extrapolate(path: list[WalkPoint], index: int, zi: float) -> np.ndarray:

@@ -1,0 +1,100 @@
+"""An FMU with events (Reference-FMU BouncingBall, e and g free): the exact interval, flagged.
+
+The bounce times move on the FMU's fixed step grid, so chi2 jumps as e and g change. The
+reference profile here is brute force: for each e, chi2 minimised over g on a dense grid and
+polished by bounded Brent searches in the best cells; its crossings are bisected.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+
+import fmuid
+from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.model.simulator import Simulator
+from fmuid.stages import make_problem
+
+FMU = Path(__file__).parents[3] / "shared" / "reference-fmus" / "fmi2" / "BouncingBall.fmu"
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(not FMU.exists(), reason=f"{FMU} is absent (Reference-FMUs not shared)"),
+]
+
+SIGMA = 0.05
+
+
+def bouncing_ball_case():
+    t = np.round(np.arange(0.0, 3.0 + 1e-9, 0.05), 10)
+    y = Simulator(FMU).simulate({"e": 0.7, "g": -9.81}, t[:1], {}, t, ["h"])[:, 0]
+    noisy = y + np.random.default_rng(1).normal(0.0, SIGMA, t.size)
+    spec = spec_from_json(
+        json.dumps(
+            {
+                "parameters": {
+                    "e": {"start": 0.75, "lower": 0.5, "upper": 1.0},
+                    "g": {"start": -9.0, "lower": -12.0, "upper": -8.0},
+                },
+                "inputs": [],
+                "outputs": {"h": {"sigma": SIGMA}},
+                "global_search": False,
+            }
+        )
+    )
+    return experiment_from_arrays("bounce.csv", t, {"h": noisy}), spec
+
+
+def profile_e(problem, e):
+    """min over g of chi2 at e: a dense grid, then bounded Brent in the three best cells."""
+    grid = np.linspace(-12.0, -8.0, 81)
+
+    def chi2(g):
+        return problem.chi2(problem.to_z({"e": e, "g": g}))
+
+    values = np.array([chi2(g) for g in grid])
+    best = float(values.min())
+    for k in np.argsort(values)[:3]:
+        a, b = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+        res = minimize_scalar(chi2, bounds=(a, b), method="bounded", options={"xatol": 1e-6})
+        best = min(best, float(res.fun))
+    return best
+
+
+def crossing(problem, e_hat, chi2_hat, threshold, direction, half):
+    """First crossing outwards from e_hat (steps of a tenth of ``half``), then bisection."""
+    inner = e_hat
+    outer = e_hat + direction * 0.1 * half
+    while profile_e(problem, outer) - chi2_hat < threshold:
+        inner, outer = outer, outer + direction * 0.1 * half
+    while abs(outer - inner) > 1e-4 * half:
+        mid = 0.5 * (inner + outer)
+        if profile_e(problem, mid) - chi2_hat < threshold:
+            inner = mid
+        else:
+            outer = mid
+    return 0.5 * (inner + outer)
+
+
+def test_bouncing_ball_exact_interval_and_non_smoothness_reported():
+    experiment, spec = bouncing_ball_case()
+    result = fmuid.profile(FMU, [experiment], spec, workers=2)
+    health = result.checks["health"]
+    assert not health["smooth"]
+    assert sum(health["jumps"].values()) > 0
+    p = result.parameters["e"]
+    assert p.quality.jumps > 0
+    problem = make_problem(FMU, [experiment], spec)
+    e_hat = p.estimate
+    chi2_hat = profile_e(problem, e_hat)
+    assert result.chi2 <= chi2_hat + 1e-6 * chi2_hat
+    thr = result.thresholds["simultaneous"]
+    lo, hi = p.ci_simultaneous
+    assert lo is not None and hi is not None
+    for end, direction in ((lo, -1), (hi, 1)):
+        half = abs(end - e_hat)
+        exact = crossing(problem, e_hat, chi2_hat, thr, direction, half)
+        assert abs(end - exact) <= 0.05 * abs(exact - e_hat), (direction, end, exact)
+    assert lo < 0.7 < hi
