@@ -59,14 +59,9 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
 
 
 def _fmu_path(text: str) -> Path:
-    from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu
+    from fmuid.model.builtin import resolve_fmu
 
-    path = Path(text)
-    if not path.exists() and text in BUILTIN_MODELS:
-        return builtin_fmu(text)
-    if not path.is_file():
-        raise FmuError(f"FMU file not found: {text}")
-    return path
+    return resolve_fmu(text)
 
 
 def _cmd_build(args: argparse.Namespace) -> int:

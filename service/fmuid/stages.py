@@ -11,6 +11,7 @@ from fmuid.errors import SpecError
 from fmuid.fit.optimize import fit_problem
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import FitResult
+from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel
 from fmuid.model.simulator import get_simulator
 from fmuid.profile.engine import profile_problem
@@ -27,8 +28,10 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
         When the FMU cannot be used (its binary is loaded and instantiated here), or the spec
         or data do not fit its variables.
 
+    ``fmu`` is an FMU file or the name of a built-in model (e.g. ``"msd"``).
     """
-    model = FmuModel(Path(fmu))
+    fmu = resolve_fmu(fmu)
+    model = FmuModel(fmu)
     check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
     free = [*spec.parameters, *(n for p in spec.physics.values() for n in p.parameters)]
     problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
@@ -53,7 +56,7 @@ def fit(
     Parameters
     ----------
     fmu
-        Path of an FMI 2.0 co-simulation FMU.
+        An FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g. ``"msd"``).
     experiments
         Datasets (``fmuid.data.load_experiment``) sharing the parameters.
     spec

@@ -151,3 +151,15 @@ def test_console_script_runs(tmp_path):
     )
     assert proc.returncode == 0
     assert "build-fmus" in proc.stdout
+
+
+def test_the_readme_python_example_takes_strings_and_builtin_names(tmp_path):
+    import fmuid
+    from fmuid.data import load_experiment, load_spec
+
+    data = str(msd_csv(tmp_path / "step.csv"))
+    spec = str(write(tmp_path / "spec.json", json.dumps(SPEC)))
+    fit = fmuid.fit("msd", [load_experiment(data)], load_spec(spec))
+    assert fit.estimates["k"] == pytest.approx(4.4, rel=0.02)
+    with pytest.raises(fmuid.errors.FmuError, match="built-in model"):
+        fmuid.fit("no_such_model", [load_experiment(data)], load_spec(spec))

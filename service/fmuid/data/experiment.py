@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -156,7 +157,7 @@ def experiment_from_arrays(
 
 
 def load_experiment(
-    path: Path, *, max_rows: int = 200_000, max_bytes: int = 50_000_000
+    path: str | os.PathLike[str], *, max_rows: int = 200_000, max_bytes: int = 50_000_000
 ) -> Experiment:
     """Read and validate one experiment CSV file.
 
@@ -181,6 +182,7 @@ def load_experiment(
         Naming the file, the row (the header is row 1) and the column at fault.
 
     """
+    path = Path(path)
     name = path.name
     try:
         with path.open("rb") as stream:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import difflib
 import json
 import math
+import os
 from collections.abc import Collection, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal, Self, get_args, get_origin
@@ -241,7 +242,7 @@ class Spec(BaseModel):
         return self
 
 
-def load_spec(path: Path) -> Spec:
+def load_spec(path: str | os.PathLike[str]) -> Spec:
     """Read and validate a spec file (JSON, UTF-8).
 
     Parameters
@@ -260,6 +261,7 @@ def load_spec(path: Path) -> Spec:
         Naming the file and, one line per problem, the field path at fault.
 
     """
+    path = Path(path)
     try:
         raw = path.read_bytes()
     except FileNotFoundError:

@@ -25,7 +25,7 @@ def diagnose(
     Parameters
     ----------
     fmu_path
-        Path of an FMI 2.0 co-simulation FMU.
+        An FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g. ``"msd"``).
     experiments
         Datasets sharing the parameters.
     spec

@@ -60,3 +60,23 @@ def _sources_newer_than(path: Path) -> bool:
         return False
     built = path.stat().st_mtime
     return any(f.stat().st_mtime > built for f in src.rglob("*") if f.is_file())
+
+
+def resolve_fmu(fmu: str | Path) -> Path:
+    """Path of an FMU given as a file or as the name of a built-in model.
+
+    Raises
+    ------
+    FmuError
+        If ``fmu`` is neither an existing file nor a built-in model name.
+
+    """
+    path = Path(fmu)
+    if not path.exists() and str(fmu) in BUILTIN_MODELS:
+        return builtin_fmu(str(fmu))
+    if not path.is_file():
+        raise FmuError(
+            f"FMU file not found: {fmu} (nor is it a built-in model: {', '.join(BUILTIN_MODELS)})"
+        )
+    return path
+
