@@ -1,17 +1,23 @@
 """The supervisor: a thread in the service that runs queued jobs, each in its own process.
 
-Every job runs in ``python -m fmuid.jobs.run`` started in a new session (its own process group),
-with its stderr in ``<data_dir>/logs/<job id>.log``. The supervisor keeps at most
+Every job runs in a job process (:mod:`fmuid.jobs.run`, started as :mod:`fmuid.jobs.proc` says)
+in a new session (its own process group), with its stderr in ``<data_dir>/logs/<job id>.log`` and
+its temporary files in ``<data_dir>/jobtmp/<job id>/``. The supervisor keeps at most
 ``settings.workers`` of them alive, kills a group past ``settings.job_timeout_s`` or when its job
 is cancelled, and, when a process ends without recording an outcome (a segfault, the OOM killer),
-fails its job with the reason read from the exit status and the log.
+fails its job with the reason read from the exit status and the log; when the store cannot take
+that outcome (a full disk), it tries again on every round until it can.
+
+The service holds a lease in the store. On start it takes the lease, kills every process left by
+the previous run of the same store, queues the interrupted jobs again and removes their leftover
+files. Every :data:`MAINTENANCE_S` it removes jobs past ``settings.retention_s`` and files no job
+owns.
 """
 
 from __future__ import annotations
 
 import logging
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -20,13 +26,23 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
+from fmuid.jobs import housekeeping as hk
 from fmuid.jobs.crash import exit_message
-from fmuid.jobs.store import Job, JobStore
+from fmuid.jobs.proc import (
+    end_processes,
+    find_job_processes,
+    job_command,
+    job_environment,
+    kill_group,
+)
+from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.settings import Settings
 
 logger = logging.getLogger(__name__)
 
 POLL_S = 0.2
+LEASE_RENEW_S = 3.0
+MAINTENANCE_S = 30.0
 
 
 @dataclass
@@ -36,22 +52,6 @@ class _Running:
     log: IO[bytes]
     log_path: Path
     started: float = field(default_factory=time.monotonic)
-
-
-def kill_group(pid: int) -> None:
-    """Send SIGKILL to the process group led by ``pid`` (a job process), if it still exists."""
-    try:
-        os.killpg(pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        pass
-
-
-def _is_job_process(pid: int, job_id: str) -> bool:
-    try:
-        cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
-    except OSError:
-        return False
-    return b"fmuid.jobs.run" in cmdline and job_id.encode() in cmdline
 
 
 class Supervisor:
@@ -76,6 +76,9 @@ class Supervisor:
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._unrecorded: dict[str, str] = {}  # job id -> failure the store could not take yet
+        self._renewed = 0.0
+        self._maintained = 0.0
 
     @property
     def busy(self) -> int:
@@ -84,12 +87,27 @@ class Supervisor:
             return len(self._running)
 
     def start(self) -> None:
-        """Requeue jobs a stopped service left running, then start the supervisor thread."""
+        """Take the store's lease, end what a previous run left, requeue its jobs, then start.
+
+        Raises
+        ------
+        LeaseHeld
+            When another live service uses the same store.
+
+        """
+        hk.take_lease(self.store)
+        self._renewed = time.monotonic()
+        leftovers = find_job_processes(self.settings.database)
+        if leftovers:
+            logger.warning("ending %d process(es) of a previous run: %s", len(leftovers), leftovers)
+            stuck = end_processes(leftovers)
+            if stuck:
+                logger.error("processes of a previous run would not die: %s", stuck)
         for job in self.store.recover():
-            if job.pid and _is_job_process(job.pid, job.id):
-                logger.warning("killing job process %s left over from a previous run", job.pid)
-                kill_group(job.pid)
             logger.info("job %s was running when the service stopped: queued again", job.id)
+        hk.remove_orphans(self.store, self.settings.data_dir, alive=set())
+        for partial in (self.settings.data_dir / "reports").glob("*.tmp"):
+            hk.remove_paths([partial])
         self._thread = threading.Thread(target=self._loop, name="fmuid-supervisor", daemon=True)
         self._thread.start()
 
@@ -107,7 +125,12 @@ class Supervisor:
                 kill_group(run.process.pid)
                 run.process.wait()
                 run.log.close()
+                hk.remove_paths([hk.job_tmp_dir(self.settings.data_dir, run.job.id)])
             self._running.clear()
+        try:
+            hk.release_lease(self.store)
+        except StoreError:
+            logger.exception("could not release the lease of the job store")
 
     def wake(self) -> None:
         """Look at the queue now (a job was submitted or cancelled)."""
@@ -125,7 +148,9 @@ class Supervisor:
         while not self._stop.is_set():
             try:
                 self._reap()
+                self._record_unrecorded()
                 self._enforce_limits()
+                self._housekeeping()
                 self._launch()
             except Exception:  # keep supervising whatever one iteration hit
                 logger.exception("supervisor iteration failed")
@@ -139,24 +164,44 @@ class Supervisor:
                 return
             self._spawn(job)
 
+    def _housekeeping(self) -> None:
+        now = time.monotonic()
+        if now - self._renewed > LEASE_RENEW_S:
+            hk.renew_lease(self.store)
+            self._renewed = now
+        if now - self._maintained < MAINTENANCE_S:
+            return
+        self._maintained = now
+        if self.settings.retention_s > 0:
+            expired = hk.expired_jobs(self.store, self.settings.retention_s)
+            for job_id in hk.delete_jobs(self.store, self.settings.data_dir, expired):
+                logger.info("job %s removed by retention (FMUID_RETENTION_S)", job_id)
+        with self._lock:
+            alive = set(self._running)
+        hk.remove_orphans(self.store, self.settings.data_dir, alive)
+        hk.remove_unused_blobs(self.store, self.settings.data_dir)
+        self.store.keep_reserve()
+
     def _spawn(self, job: Job) -> None:
-        cmd = [
-            sys.executable,
-            "-m",
-            "fmuid.jobs.run",
-            job.id,
+        args = [
             "--db",
             str(self.settings.database),
             "--data-dir",
             str(self.settings.data_dir),
             "--memory-mb",
             str(self.settings.job_memory_mb),
+            "--timeout-s",
+            str(self.settings.job_timeout_s),
         ]
         if self.settings.dask_scheduler:
-            cmd += ["--dask-scheduler", self.settings.dask_scheduler]
+            args += ["--dask-scheduler", self.settings.dask_scheduler]
+        cmd = job_command(sys.executable, job.id, args)
         log_path = self.log_dir / f"{job.id}.log"
         log = open(log_path, "ab")  # noqa: SIM115 - closed when the process is reaped
-        env = dict(os.environ, PYTHONFAULTHANDLER="1")
+        env = job_environment(self.settings.database, job.id)
+        tmp = hk.job_tmp_dir(self.settings.data_dir, job.id)
+        tmp.mkdir(parents=True, exist_ok=True)
+        env["TMPDIR"] = str(tmp)
         try:
             process = subprocess.Popen(
                 cmd,
@@ -196,11 +241,24 @@ class Supervisor:
             kill_group(run.process.pid)  # pool workers the job left behind, before pid reuse
             returncode = run.process.wait()
             run.log.close()
+            data_dir = self.settings.data_dir
+            partial = data_dir / "reports" / f"{run.job.id}.tmp"
+            hk.remove_paths([hk.job_tmp_dir(data_dir, run.job.id), partial])
+            logger.info("job %s process ended with status %s", run.job.id, returncode)
             job = self.store.get(run.job.id)
             if job is not None and job.status == "running":
                 log = run.log_path.read_text(errors="replace")
-                self.store.fail(job.id, exit_message(returncode, log, self.settings.job_memory_mb))
-            logger.info("job %s process ended with status %s", run.job.id, returncode)
+                reason = exit_message(returncode, log, self.settings.job_memory_mb)
+                self._unrecorded[job.id] = reason
+
+    def _record_unrecorded(self) -> None:
+        for job_id, reason in list(self._unrecorded.items()):
+            try:
+                self.store.fail(job_id, reason)
+            except StoreError:
+                logger.exception("cannot record that job %s failed yet", job_id)
+                return
+            del self._unrecorded[job_id]
 
 
 def _has_exited(process: subprocess.Popen[bytes]) -> bool:

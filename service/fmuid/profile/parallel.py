@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import hashlib
 import multiprocessing
 import os
 import queue
+import signal
 import tempfile
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -73,7 +75,9 @@ def run_branch(task: BranchTask) -> BranchResult:
 
 
 def _init_worker(progress_queue: Any) -> None:
+    """Set up a pool worker: it dies with its parent (``PR_SET_PDEATHSIG``) and reports points."""
     global _PROGRESS_QUEUE
+    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
     _PROGRESS_QUEUE = progress_queue
 
 
@@ -116,7 +120,10 @@ def run_branches(
 
             out.append(task.walk(report))
         return out
-    ctx = multiprocessing.get_context("fork")
+    # forkserver, not fork: this process may have threads (BLAS, a job's watchdog); the server
+    # exits when this process does, and its workers then die by their parent-death signal
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload([__name__])
     progress_queue = ctx.Queue()
     with ProcessPoolExecutor(
         n, mp_context=ctx, initializer=_init_worker, initargs=(progress_queue,)
