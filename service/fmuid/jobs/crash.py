@@ -18,6 +18,8 @@ _FRAME = re.compile(
 )
 _FMI_NAME = re.compile(r"fmi[23][A-Z]\w*")
 FMI_VERSION_LINE = "fmuid job: FMI version "
+STORE_FAILED_EXIT = 75
+"""Exit status of a job process that could not write its outcome to the job store."""
 _VERSION = re.compile(re.escape(FMI_VERSION_LINE) + r"(\d)")
 # what allocators print when an allocation fails (xmalloc-style C, C++'s std::bad_alloc, Python)
 _OUT_OF_MEMORY = re.compile(r"out of memory|bad_alloc|MemoryError|Cannot allocate memory", re.I)
@@ -123,6 +125,8 @@ def exit_message(returncode: int, log: str, memory_mb: int) -> str:
         if _OUT_OF_MEMORY.search(log):
             return f"{memory_message(memory_mb)}: the FMU gave up ({name}){place}"
         return f"the FMU crashed ({name}){place}; the job process ended by signal {sig}"
+    if returncode == STORE_FAILED_EXIT:
+        return "the job store could not be written while the job ran (disk full or I/O error)"
     if _OUT_OF_MEMORY.search(log):
         return memory_message(memory_mb)
     return f"the job process exited with status {returncode} without a result"

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from fmuid.errors import FmuidError
-from fmuid.jobs.crash import FMI_VERSION_LINE, crash_message, memory_message
+from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -91,7 +91,10 @@ class ProgressWriter:
         now = time.monotonic()
         if now - self._last >= self.interval or (event.total and event.done >= event.total):
             self._last = now
-            self.store.set_progress(self.job_id, event.done, event.total, event.stage)
+            try:
+                self.store.set_progress(self.job_id, event.done, event.total, event.stage)
+            except StoreError as exc:  # progress can wait; the outcome is written with retries
+                logger.warning("progress of job %s not recorded: %s", self.job_id, exc)
 
 
 def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[Path]]:
@@ -256,8 +259,12 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     enforce_time_limit(store, job.id, args.timeout_s)
     report_dir = args.data_dir / "reports"
-    report_dir.mkdir(parents=True, exist_ok=True)
-    return run_job(store, job, report_dir, args.memory_mb, args.dask_scheduler)
+    try:
+        report_dir.mkdir(parents=True, exist_ok=True)
+        return run_job(store, job, report_dir, args.memory_mb, args.dask_scheduler)
+    except StoreError:
+        logger.exception("job %s could not record its outcome", job.id)
+        return STORE_FAILED_EXIT
 
 
 if __name__ == "__main__":

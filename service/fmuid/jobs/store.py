@@ -20,9 +20,12 @@ import time
 import uuid
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from typing import ParamSpec, TypeVar
+
+from fmuid.jobs.records import Dataset, Job
+
+__all__ = ["Dataset", "Job", "JobStore", "QueueFull", "StoreError", "retried"]
 
 logger = logging.getLogger(__name__)
 
@@ -62,6 +65,7 @@ CREATE TABLE IF NOT EXISTS results (
     job_id TEXT PRIMARY KEY REFERENCES jobs (id),
     json TEXT NOT NULL
 );
+CREATE TABLE IF NOT EXISTS probe (id INTEGER PRIMARY KEY CHECK (id = 1), time REAL NOT NULL);
 CREATE TABLE IF NOT EXISTS lease (
     id INTEGER PRIMARY KEY CHECK (id = 1),
     pid INTEGER NOT NULL,
@@ -77,6 +81,10 @@ class StoreError(RuntimeError):
     """The job store could not be read or written (disk full, I/O error, damaged file)."""
 
 
+class QueueFull(RuntimeError):
+    """The queue holds ``max_queued`` jobs already."""
+
+
 def retried(method: Callable[P, R]) -> Callable[P, R]:
     """Retry a write of the store on transient SQLite errors; raise :class:`StoreError` at last.
 
@@ -90,81 +98,20 @@ def retried(method: Callable[P, R]) -> Callable[P, R]:
         for attempt in range(WRITE_ATTEMPTS):
             try:
                 return method(*args, **kwargs)
-            except sqlite3.DatabaseError as exc:
+            except sqlite3.OperationalError as exc:  # locked, I/O error, disk full
                 error = exc
                 logger.warning("store %s failed (%s), attempt %d", method.__name__, exc, attempt)
                 if "full" in str(exc):
                     store.release_reserve()
-                time.sleep(0.05 * 4**attempt)
+                if attempt + 1 < WRITE_ATTEMPTS:
+                    time.sleep(0.05 * 4**attempt)
+            except sqlite3.DatabaseError as exc:  # a damaged file: trying again will not help
+                raise StoreError(f"job store {store.db_path}: {exc}") from exc
         raise StoreError(
             f"job store {store.db_path}: {method.__name__} failed {WRITE_ATTEMPTS} times: {error}"
         ) from error
 
     return wrapper
-
-
-@dataclass(frozen=True)
-class Dataset:
-    """One uploaded CSV file: its original file name (the experiment name) and content hash."""
-
-    name: str
-    sha256: str
-
-
-@dataclass(frozen=True)
-class Job:
-    """One row of the jobs table.
-
-    Attributes
-    ----------
-    id
-        A UUID4 string.
-    kind
-        ``"fit"``, ``"profile"`` or ``"diagnose"``.
-    status
-        ``"queued"``, ``"running"``, ``"done"``, ``"failed"`` or ``"cancelled"``.
-    created, started, finished
-        Unix times [s]; ``started``/``finished`` are ``None`` until they happen.
-    progress_done, progress_total, progress_stage
-        The last progress event the job process reported.
-    error
-        Why the job failed or was cancelled.
-    fmu_sha256, model_name
-        The FMU (a blob) and its model name.
-    spec
-        The study specification as JSON text, exactly as submitted.
-    datasets
-        The CSV files, in submission order.
-    attempts
-        How many times a job process was started for it.
-    pid
-        Process id of its job process while running.
-
-    """
-
-    id: str
-    kind: str
-    status: str
-    created: float
-    started: float | None
-    finished: float | None
-    progress_done: int
-    progress_total: int
-    progress_stage: str
-    error: str | None
-    fmu_sha256: str
-    model_name: str
-    spec: str
-    datasets: tuple[Dataset, ...]
-    attempts: int
-    pid: int | None
-
-    @classmethod
-    def from_row(cls, row: sqlite3.Row) -> Job:
-        """Build a job from a ``SELECT * FROM jobs`` row."""
-        values = dict(row)
-        values["datasets"] = tuple(Dataset(**d) for d in json.loads(values["datasets"]))
-        return cls(**values)
 
 
 class JobStore:
@@ -176,18 +123,24 @@ class JobStore:
         The SQLite file; created with its tables when missing.
     data_dir
         Folder of ``blobs/``; created when missing.
+    max_queued
+        :meth:`create` raises :class:`QueueFull` when this many jobs are queued already.
 
     """
 
-    def __init__(self, db_path: Path, data_dir: Path):
+    def __init__(self, db_path: Path, data_dir: Path, max_queued: int | None = None):
         self.db_path = Path(db_path)
+        self.max_queued = max_queued
         self.blob_dir = Path(data_dir) / "blobs"
         self.blob_dir.mkdir(parents=True, exist_ok=True)
         self.tmp_dir().mkdir(exist_ok=True)
         self.db_path.parent.mkdir(parents=True, exist_ok=True)
         self._local = threading.local()
         self.reserve = Path(data_dir) / "reserve"
-        self._connection().executescript(_SCHEMA)
+        try:
+            self._connection().executescript(_SCHEMA)
+        except sqlite3.DatabaseError as exc:  # the service still starts, and says so in health
+            logger.error("job store %s cannot be opened: %s", self.db_path, exc)
         self.keep_reserve()
 
     # -- connections -------------------------------------------------------------------------
@@ -275,9 +228,22 @@ class JobStore:
         model_name: str,
         datasets: list[Dataset],
     ) -> Job:
-        """Insert a queued job and return it."""
+        """Insert a queued job and return it.
+
+        Raises
+        ------
+        QueueFull
+            When :attr:`max_queued` jobs are queued already.
+
+        """
         job_id = str(uuid.uuid4())
         with self.transaction() as conn:
+            if self.max_queued is not None:
+                (queued,) = conn.execute(
+                    "SELECT COUNT(*) FROM jobs WHERE status = 'queued'"
+                ).fetchone()
+                if queued >= self.max_queued:
+                    raise QueueFull(f"the queue is full: {queued} jobs wait (FMUID_QUEUE_LIMIT)")
             conn.execute(
                 "INSERT INTO jobs (id, kind, status, created, fmu_sha256, model_name, spec,"
                 " datasets) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",

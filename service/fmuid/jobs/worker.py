@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import logging
 import os
+import sqlite3
 import subprocess
 import sys
 import threading
@@ -43,6 +44,7 @@ logger = logging.getLogger(__name__)
 POLL_S = 0.2
 LEASE_RENEW_S = 3.0
 MAINTENANCE_S = 30.0
+FAILED_ROUND_PAUSE_S = 2.0
 
 
 @dataclass
@@ -79,6 +81,7 @@ class Supervisor:
         self._unrecorded: dict[str, str] = {}  # job id -> failure the store could not take yet
         self._renewed = 0.0
         self._maintained = 0.0
+        self._recovered = False
 
     @property
     def busy(self) -> int:
@@ -89,12 +92,25 @@ class Supervisor:
     def start(self) -> None:
         """Take the store's lease, end what a previous run left, requeue its jobs, then start.
 
+        A store that cannot be read or written now is tried again every round; no job starts
+        until then.
+
         Raises
         ------
         LeaseHeld
             When another live service uses the same store.
 
         """
+        try:
+            self._recover()
+        except hk.LeaseHeld:
+            raise
+        except (StoreError, sqlite3.Error):
+            logger.exception("cannot recover the jobs of %s yet", self.settings.database)
+        self._thread = threading.Thread(target=self._loop, name="fmuid-supervisor", daemon=True)
+        self._thread.start()
+
+    def _recover(self) -> None:
         hk.take_lease(self.store)
         self._renewed = time.monotonic()
         leftovers = find_job_processes(self.settings.database)
@@ -108,8 +124,7 @@ class Supervisor:
         hk.remove_orphans(self.store, self.settings.data_dir, alive=set())
         for partial in (self.settings.data_dir / "reports").glob("*.tmp"):
             hk.remove_paths([partial])
-        self._thread = threading.Thread(target=self._loop, name="fmuid-supervisor", daemon=True)
-        self._thread.start()
+        self._recovered = True
 
     def stop(self) -> None:
         """Stop taking jobs and kill the running job processes.
@@ -147,14 +162,18 @@ class Supervisor:
     def _loop(self) -> None:
         while not self._stop.is_set():
             try:
+                if not self._recovered:
+                    self._recover()
                 self._reap()
                 self._record_unrecorded()
                 self._enforce_limits()
                 self._housekeeping()
                 self._launch()
+                delay = POLL_S
             except Exception:  # keep supervising whatever one iteration hit
                 logger.exception("supervisor iteration failed")
-            self._wake.wait(POLL_S)
+                delay = FAILED_ROUND_PAUSE_S
+            self._wake.wait(delay)
             self._wake.clear()
 
     def _launch(self) -> None:
