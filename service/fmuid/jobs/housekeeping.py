@@ -1,17 +1,19 @@
 """Keeping the data folder bounded: the service lease, job removal, retention, disk room.
 
 Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``),
-``logs/<id>.log`` and ``jobtmp/<id>/`` (the job processes' ``TMPDIR``: extracted FMU copies and
+``logs/<id>.log`` and :func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and
 work folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
 refers to them any more.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 import os
 import shutil
+import tempfile
 import time
 from pathlib import Path
 
@@ -41,9 +43,19 @@ def job_files(data_dir: Path, job_id: str) -> list[Path]:
     ]
 
 
+def job_tmp_root(data_dir: Path) -> Path:
+    """Return the folder of the jobs' temporary folders: one per data folder, in the system's.
+
+    It is not in the data folder because the path of a Unix socket (multiprocessing's
+    forkserver makes one in ``TMPDIR``) must be shorter than 108 bytes.
+    """
+    key = hashlib.sha256(str(data_dir).encode()).hexdigest()[:12]
+    return Path(tempfile.gettempdir()) / f"fmuid-{key}"
+
+
 def job_tmp_dir(data_dir: Path, job_id: str) -> Path:
     """Return the ``TMPDIR`` of a job's processes (removed when the job process ends)."""
-    return data_dir / "jobtmp" / job_id
+    return job_tmp_root(data_dir) / job_id
 
 
 def remove_paths(paths: list[Path]) -> None:
@@ -170,7 +182,7 @@ def remove_orphans(store: JobStore, data_dir: Path, alive: set[str]) -> None:
         for path in folder.glob("*") if folder.is_dir() else []:
             if path.name.split(".")[0] not in ids:
                 remove_paths([path])
-    tmp_root = data_dir / "jobtmp"
+    tmp_root = job_tmp_root(data_dir)
     for path in tmp_root.iterdir() if tmp_root.is_dir() else []:
         if path.name not in alive:
             remove_paths([path])

@@ -13,6 +13,7 @@ it draws the HTML report.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import math
@@ -158,15 +159,17 @@ def write_report(
     """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not)."""
     error_file = directory.with_name(directory.name + ".error")
     tmp = directory.with_name(directory.name + ".tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
     try:
+        shutil.rmtree(tmp, ignore_errors=True)
+        directory.parent.mkdir(parents=True, exist_ok=True)
         from fmuid.report import write_report as report
 
         report(result, tmp, fmu=fmu, experiments=experiments, spec=spec)
     except Exception as exc:  # a failed report must not fail a finished job
         logger.exception("report of %s failed", directory.name)
         shutil.rmtree(tmp, ignore_errors=True)
-        error_file.write_text(f"{type(exc).__name__}: {exc}")
+        with contextlib.suppress(OSError):
+            error_file.write_text(f"{type(exc).__name__}: {exc}")
         return
     shutil.rmtree(directory, ignore_errors=True)
     os.replace(tmp, directory)
@@ -260,7 +263,6 @@ def main(argv: list[str] | None = None) -> int:
     enforce_time_limit(store, job.id, args.timeout_s)
     report_dir = args.data_dir / "reports"
     try:
-        report_dir.mkdir(parents=True, exist_ok=True)
         return run_job(store, job, report_dir, args.memory_mb, args.dask_scheduler)
     except StoreError:
         logger.exception("job %s could not record its outcome", job.id)

@@ -2,7 +2,7 @@
 
 Every job runs in a job process (:mod:`fmuid.jobs.run`, started as :mod:`fmuid.jobs.proc` says)
 in a new session (its own process group), with its stderr in ``<data_dir>/logs/<job id>.log`` and
-its temporary files in ``<data_dir>/jobtmp/<job id>/``. The supervisor keeps at most
+its temporary files in :func:`fmuid.jobs.housekeeping.job_tmp_dir`. The supervisor keeps at most
 ``settings.workers`` of them alive, kills a group past ``settings.job_timeout_s`` or when its job
 is cancelled, and, when a process ends without recording an outcome (a segfault, the OOM killer),
 fails its job with the reason read from the exit status and the log; when the store cannot take
@@ -188,11 +188,13 @@ class Supervisor:
         if now - self._renewed > LEASE_RENEW_S:
             hk.renew_lease(self.store)
             self._renewed = now
-        if now - self._maintained < MAINTENANCE_S:
+        retention = self.settings.retention_s
+        interval = min(MAINTENANCE_S, retention / 4) if retention > 0 else MAINTENANCE_S
+        if now - self._maintained < interval:
             return
         self._maintained = now
-        if self.settings.retention_s > 0:
-            expired = hk.expired_jobs(self.store, self.settings.retention_s)
+        if retention > 0:
+            expired = hk.expired_jobs(self.store, retention)
             for job_id in hk.delete_jobs(self.store, self.settings.data_dir, expired):
                 logger.info("job %s removed by retention (FMUID_RETENTION_S)", job_id)
         with self._lock:
