@@ -67,6 +67,9 @@ class Settings(BaseSettings):
     min_free_bytes
         Free space the data folder's file system needs [bytes]; below it new jobs get 507 and
         health says degraded.
+    warm_start
+        Fork job processes from a server that imported the engine once (milliseconds per job)
+        instead of starting a new interpreter per job (seconds).
 
     """
 
@@ -87,6 +90,7 @@ class Settings(BaseSettings):
     retention_s: float = Field(default=30 * 86400.0, ge=0)
     disk_quota_bytes: int = Field(default=0, ge=0)
     min_free_bytes: int = Field(default=100 * 1024 * 1024, ge=0)
+    warm_start: bool = True
 
     @model_validator(mode="after")
     def _resolve_paths(self) -> Settings:

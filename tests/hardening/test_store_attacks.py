@@ -67,6 +67,7 @@ def test_delete_of_a_finished_job_removes_it_and_its_files(service_factory, step
     client = service.client()
     job = submit(service, step_csv).json()["id"]
     assert client.wait(job, timeout=300)["status"] == "done"
+    assert "<html" in client.report(job).lower()  # waits while the report is drawn
     report = service.data_dir / "reports" / job
     assert (report / "index.html").is_file()
     answer = httpx.delete(f"{service.url}/v1/jobs/{job}", timeout=10)

@@ -156,11 +156,14 @@ def run_engine(
 def write_report(
     result: Any, directory: Path, fmu: Path, experiments: list[Any], spec: Any
 ) -> None:
-    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not)."""
+    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not).
+
+    It is drawn in ``<directory>.tmp`` (made before the result was stored, so that the report
+    route knows it is coming; removed by the supervisor when the process ends) and renamed.
+    """
     error_file = directory.with_name(directory.name + ".error")
     tmp = directory.with_name(directory.name + ".tmp")
     try:
-        shutil.rmtree(tmp, ignore_errors=True)
         directory.parent.mkdir(parents=True, exist_ok=True)
         from fmuid.report import write_report as report
 
@@ -210,6 +213,8 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
             traceback.print_exc()
             store.fail(job.id, f"internal error: {type(exc).__name__}: {exc}")
             return 1
+        with contextlib.suppress(OSError):  # says "being drawn" to the report route
+            (report_dir / f"{job.id}.tmp").mkdir(parents=True, exist_ok=True)
         try:
             stored = store.finish(job.id, result_json)
         except StoreError as exc:

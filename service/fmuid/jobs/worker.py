@@ -17,25 +17,16 @@ owns.
 from __future__ import annotations
 
 import logging
-import os
 import sqlite3
-import subprocess
-import sys
 import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO
 
 from fmuid.jobs import housekeeping as hk
 from fmuid.jobs.crash import exit_message
-from fmuid.jobs.proc import (
-    end_processes,
-    find_job_processes,
-    job_command,
-    job_environment,
-    kill_group,
-)
+from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmServer
+from fmuid.jobs.proc import end_processes, find_job_processes, kill_group
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.settings import Settings
 
@@ -50,8 +41,7 @@ FAILED_ROUND_PAUSE_S = 2.0
 @dataclass
 class _Running:
     job: Job
-    process: subprocess.Popen[bytes]
-    log: IO[bytes]
+    process: JobProcess
     log_path: Path
     started: float = field(default_factory=time.monotonic)
 
@@ -82,6 +72,7 @@ class Supervisor:
         self._renewed = 0.0
         self._maintained = 0.0
         self._recovered = False
+        self._warm = WarmServer(settings.database)
 
     @property
     def busy(self) -> int:
@@ -139,7 +130,6 @@ class Supervisor:
             for run in self._running.values():
                 kill_group(run.process.pid)
                 run.process.wait()
-                run.log.close()
                 hk.remove_paths([hk.job_tmp_dir(self.settings.data_dir, run.job.id)])
             self._running.clear()
         try:
@@ -216,29 +206,20 @@ class Supervisor:
         ]
         if self.settings.dask_scheduler:
             args += ["--dask-scheduler", self.settings.dask_scheduler]
-        cmd = job_command(sys.executable, job.id, args)
         log_path = self.log_dir / f"{job.id}.log"
-        log = open(log_path, "ab")  # noqa: SIM115 - closed when the process is reaped
-        env = job_environment(self.settings.database, job.id)
         tmp = hk.job_tmp_dir(self.settings.data_dir, job.id)
-        tmp.mkdir(parents=True, exist_ok=True)
-        env["TMPDIR"] = str(tmp)
+        launch = Launch(job.id, args, log_path, tmp, self.settings.database)
         try:
-            process = subprocess.Popen(
-                cmd,
-                stdin=subprocess.DEVNULL,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                env=env,
-                start_new_session=True,
+            tmp.mkdir(parents=True, exist_ok=True)
+            process: JobProcess = (
+                self._warm.start(launch) if self.settings.warm_start else ColdProcess(launch)
             )
         except OSError as exc:
-            log.close()
             self.store.fail(job.id, f"could not start a job process: {exc}")
             return
         self.store.set_pid(job.id, process.pid)
         with self._lock:
-            self._running[job.id] = _Running(job, process, log, log_path)
+            self._running[job.id] = _Running(job, process, log_path)
         logger.info("job %s (%s) started in process %s", job.id, job.kind, process.pid)
 
     def _enforce_limits(self) -> None:
@@ -255,13 +236,12 @@ class Supervisor:
 
     def _reap(self) -> None:
         with self._lock:
-            ended = [run for run in self._running.values() if _has_exited(run.process)]
+            ended = [run for run in self._running.values() if run.process.exited()]
             for run in ended:
                 del self._running[run.job.id]
         for run in ended:
             kill_group(run.process.pid)  # pool workers the job left behind, before pid reuse
             returncode = run.process.wait()
-            run.log.close()
             data_dir = self.settings.data_dir
             partial = data_dir / "reports" / f"{run.job.id}.tmp"
             hk.remove_paths([hk.job_tmp_dir(data_dir, run.job.id), partial])
@@ -280,14 +260,3 @@ class Supervisor:
                 logger.exception("cannot record that job %s failed yet", job_id)
                 return
             del self._unrecorded[job_id]
-
-
-def _has_exited(process: subprocess.Popen[bytes]) -> bool:
-    """Whether a child has exited, without reaping it (its pid stays reserved until then)."""
-    if process.returncode is not None:
-        return True
-    try:
-        info = os.waitid(os.P_PID, process.pid, os.WEXITED | os.WNOHANG | os.WNOWAIT)
-    except ChildProcessError:
-        return True
-    return info is not None
