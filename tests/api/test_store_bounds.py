@@ -193,7 +193,10 @@ def test_a_lease_of_a_dead_service_is_taken_over(tmp_path):
 def test_crash_messages_name_the_fmi_function_of_the_fmus_version(version, module, expected):
     log = (
         f"{FMI_VERSION_LINE}{version}\n"
-        "Fatal Python error: Segmentation fault\n\nCurrent thread 0x1 (most recent call first):\n"
+        "Fatal Python error: Segmentation fault\n\n"
+        "Thread 0x2 (most recent call first):\n"  # the job's watchdog, listed first
+        '  File "/usr/lib/python3.11/threading.py", line 331 in wait\n\n'
+        "Current thread 0x1 (most recent call first):\n"
         f'  File "/x/fmpy/{module}.py", line 10 in w\n'
         f'  File "/x/fmpy/{module}.py", line 20 in doStep\n'
     )

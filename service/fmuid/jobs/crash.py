@@ -57,7 +57,7 @@ def fmi_call_in_traceback(log: str) -> str | None:
         return None
     version = _VERSION.search(log)
     prefix = f"fmi{version[1]}" if version else None
-    frames = list(_FRAME.finditer(log, fatal[-1].end()))
+    frames = list(_FRAME.finditer(_crashed_thread(log, fatal[-1].end())))
     if frames:
         innermost = frames[0]
         lineno = int(innermost["line"])
@@ -74,6 +74,15 @@ def fmi_call_in_traceback(log: str) -> str | None:
             where = module[1] if module else prefix or "fmi2"
             return where + func[0].upper() + func[1:]
     return None
+
+
+def _crashed_thread(log: str, start: int) -> str:
+    """Return the stack of the thread that crashed (faulthandler also lists the other threads)."""
+    current = log.find("Current thread", start)
+    if current == -1:
+        return log[start:]
+    end = log.find("\n\n", current)
+    return log[current : end if end != -1 else len(log)]
 
 
 def memory_message(memory_mb: int) -> str:
