@@ -31,7 +31,7 @@ def wait_until(predicate, timeout=120.0):
 
 @pytest.fixture
 def dask_cluster(tmp_path):
-    """``dask scheduler`` and two ``dask worker`` processes; yields (address, worker processes)."""
+    """``dask scheduler`` and two ``dask worker`` processes; yields the scheduler's address."""
     pytest.importorskip("distributed")
     dask = [sys.executable, "-m"]
     scheduler_file = tmp_path / "scheduler.json"
@@ -56,7 +56,7 @@ def dask_cluster(tmp_path):
             for _ in range(2)
         ]  # fmt: skip
         started += workers
-        yield address, workers
+        yield address
     finally:
         for process in started:
             if process.poll() is None:
@@ -68,19 +68,28 @@ def dask_cluster(tmp_path):
 def test_a_profile_job_survives_a_killed_dask_worker(
     service_factory, step_csv, dask_cluster, tmp_path
 ):
-    address, workers = dask_cluster
+    address = dask_cluster
     from distributed import Client
 
-    with Client(address, timeout="60s") as client:
-        client.wait_for_workers(2, timeout=120)
-    service = service_factory(tmp_path / "data", FMUID_DASK_SCHEDULER=address)
-    client = service.client()
-    assert client.health()["dask_scheduler"] == address
-    job = client.submit("profile", msd_spec(), [step_csv], model="msd")
-    assert wait_until(lambda: client.status(job)["progress"]["stage"] == "profile", 600)
-    workers[0].kill()
-    status = client.wait(job, timeout=900)
-    assert status["status"] == "done", status
+    with Client(address, timeout="60s") as dask_client:
+        dask_client.wait_for_workers(2, timeout=120)
+        service = service_factory(tmp_path / "data", FMUID_DASK_SCHEDULER=address)
+        client = service.client()
+        assert client.health()["dask_scheduler"] == address
+        job = client.submit("profile", msd_spec(), [step_csv], model="msd")
+
+        def busy_worker() -> str | None:
+            busy = [w for w, tasks in dask_client.processing().items() if tasks]
+            return busy[0] if busy else None
+
+        assert wait_until(lambda: busy_worker() is not None, 600), client.status(job)
+        victim = busy_worker()
+        pid = dask_client.run(os.getpid, workers=[victim])[victim]
+        os.kill(pid, signal.SIGKILL)  # a worker dies with branches of the job on it
+        assert client.status(job)["status"] == "running"
+        status = client.wait(job, timeout=900)
+        assert status["status"] == "done", status["error"]
+        assert len(dask_client.scheduler_info()["workers"]) == 1
     result = client.result(job)
     direct = fmuid.profile(
         "msd", [load_experiment(step_csv)], spec_from_json(msd_spec()), workers=1

@@ -153,7 +153,9 @@ def _run_dask(
     from distributed import as_completed
 
     problem = tasks[0].problem
-    [fmu_blob] = client.scatter([Path(problem.fmu_path).read_bytes()], broadcast=True, hash=True)
+    # the FMU's bytes travel with each task, not scattered: a task whose worker dies is run
+    # again elsewhere, while scattered data lost with its worker cancels the tasks that need it
+    fmu_blob = Path(problem.fmu_path).read_bytes()
     futures = [
         client.submit(run_branch_anywhere, t, problem.model.sha256, fmu_blob, pure=False)
         for t in tasks
