@@ -262,6 +262,7 @@ def diagnose_problem(
         "parameters_before": dict(fit.estimates),
         "fmu": {"sha256": fit.fmu_sha256, "model_name": fit.model_name},
         "scan_p_value": scan_test.p_value,
+        "units": dict(fit.units),
     }  # fmt: skip
     if not evidence:
         return Diagnosis(

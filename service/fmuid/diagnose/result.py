@@ -134,6 +134,7 @@ class Diagnosis:
     scan_p_value: float | None = None
     fmu: dict[str, str] = field(default_factory=dict)
     cost: Cost = Cost(0, 0.0)
+    units: dict[str, str] = field(default_factory=dict)
 
     def whiteness(self, after: bool) -> dict[str, float]:
         """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""
@@ -180,6 +181,7 @@ class Diagnosis:
             "tests_after": [t.to_dict() for t in self.tests_after],
             "generic_correction": self.generic_correction,
             "cost": self.cost.to_dict(),
+            "units": dict(self.units),
         }
         return {"verdict": verdict(out), **out}
 

@@ -277,4 +277,5 @@ def make_fit_result(
         message=message,
         cost=Cost(problem.simulations - sims0, time.perf_counter() - t0),
         fmu_info=fmu_summary(problem.fmu_path),
+        units=problem.units(),
     )

@@ -131,6 +131,13 @@ class Problem:
             for n, s, zi in zip(self.names, self.scales, z, strict=True)
         }
 
+    def units(self) -> dict[str, str]:
+        """Return the unit of each free parameter, input and output that the FMU declares."""
+        model = self.model
+        declared = {**model.parameters, **model.inputs, **model.outputs}
+        names = [*self.names, *self.inputs, *self.outputs]
+        return {n: declared[n].unit or "" for n in names if n in declared and declared[n].unit}
+
     def representative_sigma(self) -> dict[str, float]:
         """Return one sigma per output: the median over its fitted samples."""
         out = {}

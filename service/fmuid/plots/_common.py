@@ -51,6 +51,7 @@ def to_plot_coordinate(value: float, scale: str) -> float:
     return math.log10(value) if scale == "log" else float(value)
 
 
-def axis_label(name: str, scale: str) -> str:
-    """Return the axis label of a parameter in plot coordinates."""
-    return f"log10({name})" if scale == "log" else name
+def axis_label(name: str, scale: str, unit: str | None = None) -> str:
+    """Return the axis label of a parameter in plot coordinates, with its unit if known."""
+    label = f"{name} [{unit}]" if unit else name
+    return f"log10({label})" if scale == "log" else label

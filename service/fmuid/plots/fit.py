@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from fmuid.fit.result import FitResult
-from fmuid.plots._common import DATA_COLOR, MODEL_COLOR
+from fmuid.plots._common import DATA_COLOR, MODEL_COLOR, axis_label
 
 if TYPE_CHECKING:
     from fmuid.fit.problem import Problem
@@ -97,6 +97,7 @@ def fit_figure(problem: Problem, fit: FitResult | Mapping[str, Any]) -> Figure:
     """
     values = fit.estimates if isinstance(fit, FitResult) else dict(fit)
     series = residual_series(problem, values)
+    units = problem.units()
     fig = Figure(figsize=(14.0, 2.8 * max(1, len(series))), layout="constrained")
     grid = fig.subplots(max(1, len(series)), 4, squeeze=False)
     for row, s in zip(grid, series, strict=False):
@@ -108,7 +109,7 @@ def fit_figure(problem: Problem, fit: FitResult | Mapping[str, Any]) -> Figure:
         )
         ax_t.set_title(f"{s.experiment}: {s.output}", fontsize=9)
         ax_t.set_xlabel("time [s]")
-        ax_t.set_ylabel(s.output)
+        ax_t.set_ylabel(axis_label(s.output, "lin", units.get(s.output)))
         ax_t.legend(fontsize=7)
         ax_r.axhline(0.0, color="0.5", lw=0.8)
         ax_r.plot(s.time, s.weighted, ".", color=DATA_COLOR, ms=4, gid="residuals")

@@ -50,13 +50,18 @@ def profile_figure(result: ProfileResult, *, ncols: int = 3) -> Figure:
     for ax, name in zip(axes, names, strict=True):
         prof = result.parameters[name]
         sd = prof.fisher_sd_z if math.isfinite(prof.fisher_sd_z) else fisher.get(name, math.inf)
-        _draw_profile(ax, prof, result.chi2, result.thresholds, sd)
+        _draw_profile(ax, prof, result.chi2, result.thresholds, sd, result.fit.units.get(name))
     fig.suptitle(f"Profile likelihoods ({result.confidence:.0%} confidence)")
     return fig
 
 
 def _draw_profile(
-    ax: Axes, prof: ParameterProfile, chi2_opt: float, thresholds: dict[str, float], sd_z: float
+    ax: Axes,
+    prof: ParameterProfile,
+    chi2_opt: float,
+    thresholds: dict[str, float],
+    sd_z: float,
+    unit: str | None = None,
 ) -> None:
     ok = [p for p in prof.points if p.error is None and math.isfinite(p.chi2)]
     failed = [p for p in prof.points if p.error is not None or not math.isfinite(p.chi2)]
@@ -120,7 +125,7 @@ def _draw_profile(
     if y.size and np.nanmax(y) < top:
         top = float(np.nanmax(y)) + 0.1 * (top - chi2_opt)
     ax.set_ylim(chi2_opt - 0.1 * (top - chi2_opt), top)
-    ax.set_xlabel(axis_label(prof.name, prof.scale))
+    ax.set_xlabel(axis_label(prof.name, prof.scale, unit))
     ax.set_ylabel("chi2")
     ax.set_title(f"{prof.name}: {prof.status.replace('_', ' ')}", fontsize=9)
 
@@ -157,7 +162,7 @@ def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
     scales = dict(zip(fit.names, fit.scales, strict=True))
     ok = [p for p in prof.points if p.error is None]
     x = np.array([to_plot_coordinate(p.value, prof.scale) for p in ok])
-    fig = Figure(figsize=(5.0, 3.2), layout="constrained")
+    fig = Figure(figsize=(8.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
     for other in others:
         ref = to_plot_coordinate(fit.estimates[other], scales[other])
@@ -173,9 +178,9 @@ def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
     x_hi = to_plot_coordinate(hi, prof.scale) if hi is not None else (x.max() if x.size else 0.0)
     ax.axvspan(x_lo, x_hi, color="0.9", zorder=0, label="simultaneous CI")
     ax.axvline(to_plot_coordinate(prof.estimate, prof.scale), color=ESTIMATE_COLOR, ls=":", lw=1)
-    ax.set_xlabel(axis_label(name, prof.scale))
-    ax.set_ylabel("change from estimate (decades for log-scaled)")
+    ax.set_xlabel(axis_label(name, prof.scale, fit.units.get(name)))
+    ax.set_ylabel("change from estimate\n(decades if log-scaled, else own unit)")
     ax.set_title(f"Parameters along the profile of {name}")
     if others:
-        ax.legend(fontsize=8)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
     return fig

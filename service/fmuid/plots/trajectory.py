@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
-from fmuid.plots._common import DATA_COLOR, new_figure
+from fmuid.plots._common import DATA_COLOR, axis_label, new_figure
 from fmuid.profile.result import ProfileResult
 
 if TYPE_CHECKING:
@@ -134,7 +134,8 @@ def trajectory_band_figure(problem: Problem, result: ProfileResult, *, n: int = 
         )
         ax.set_title(f"{exp.name}: {problem.outputs[j]}", fontsize=9)
         ax.set_xlabel("time [s]")
-        ax.set_ylabel(problem.outputs[j])
+        output = problem.outputs[j]
+        ax.set_ylabel(axis_label(output, "lin", result.fit.units.get(output)))
     if positions:
         for k, exp in enumerate(problem.experiments):
             ax = axes[len(series) + k]

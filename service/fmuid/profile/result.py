@@ -189,6 +189,7 @@ class ProfileResult:
             "structural_check": self.structural_check,
             "checks": self.checks,
             "cost": self.cost.to_dict(),
+            "units": dict(self.fit.units),
         }
 
 
