@@ -20,6 +20,7 @@ TEST_NAMES = {
     "input_cross_correlation": "residual-input cross-correlation",
     "residual_bias": "residual mean",
     "chi2_goodness_of_fit": "chi2 against the noise",
+    "equal_predictions": "equal predictions (within the noise)",
 }
 
 
@@ -31,14 +32,19 @@ def _where(test: dict[str, Any]) -> str:
     return " / ".join(str(test[k]) for k in ("experiment", "output") if test.get(k)) or "all"
 
 
-def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
+def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
     added = d.get("added_parameters") or {}
     if added:
         page.table(
             ["added parameter", "estimate", "unit", "interval", "excludes the off value"],
             [
-                [n, v.get("estimate"), v.get("unit", ""), interval(v.get("ci") or (None, None)),
-                 "yes" if v.get("excludes_off") else "no"]
+                [
+                    n,
+                    v.get("estimate"),
+                    v.get("unit", ""),
+                    interval(v.get("ci") or (None, None)),
+                    "yes" if v.get("excludes_off") else "no",
+                ]
                 for n, v in added.items()
             ],  # fmt: skip
             caption="Parameters of the added physics (profile-likelihood interval)",
@@ -54,13 +60,17 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
     absorbed = d.get("absorbed") or {}
     if absorbed:
         page.table(
-            ["parameter", "before", "status before", "after", "status after", "absorbs"],
+            ["parameter", "unit", "before", "status before", "after", "status after", "absorbs"],
             [
-                [n, f"{fmt(a['before']['estimate'])} {interval(a['before']['ci'])}",
-                 a["before"]["status"].replace("_", " "),
-                 f"{fmt(a['after']['estimate'])} {interval(a['after']['ci'])}",
-                 a["after"]["status"].replace("_", " "),
-                 "; ".join(a.get("reasons") or []) or "no"]
+                [
+                    n,
+                    units.get(n, "\u2014"),
+                    f"{fmt(a['before']['estimate'])} {interval(a['before']['ci'])}",
+                    a["before"]["status"].replace("_", " "),
+                    f"{fmt(a['after']['estimate'])} {interval(a['after']['ci'])}",
+                    a["after"]["status"].replace("_", " "),
+                    "; ".join(a.get("reasons") or []) or "no",
+                ]
                 for n, a in absorbed.items()
             ],  # fmt: skip
             caption="The original parameters without and with the added term",
@@ -68,16 +78,27 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
     if d.get("evidence"):
         page.table(
             ["test", "where", "p-value"],
-            [[TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
-             for e in d["evidence"]],  # fmt: skip
+            [
+                [TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
+                for e in d["evidence"]
+            ],  # fmt: skip
             caption="Evidence of the mismatch (tests rejected at the family-wise level)",
         )
     if d.get("candidates"):
         page.table(
             ["effect", "parameters", "chi2", "LR statistic", "p-value", "adjusted p", "round"],
-            [[c["effect"], _params(c.get("parameters", {})), c.get("chi2"), c.get("statistic"),
-              c.get("p_value"), c.get("p_adjusted"), c.get("stage", 1)]
-             for c in d["candidates"]],  # fmt: skip
+            [
+                [
+                    c["effect"],
+                    _params(c.get("parameters", {})),
+                    c.get("chi2"),
+                    c.get("statistic"),
+                    c.get("p_value"),
+                    c.get("p_adjusted"),
+                    c.get("stage", 1),
+                ]
+                for c in d["candidates"]
+            ],  # fmt: skip
             caption="Every candidate of the catalogue",
         )
     correction = d.get("generic_correction")
@@ -106,11 +127,13 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
 def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) -> None:
     """Add the verdict, the tables and (with the problem) the figures of a diagnosis."""
     d = diagnosis.to_dict()
-    page.heading("Verdict")
-    page.paragraph(d.get("verdict") or verdict(d))
-    if d.get("description"):
-        page.paragraph(str(d["description"]))
+    units = dict(problem.units()) if problem is not None else {}
+    units.update(d.get("units") or {})
+    added = d.get("added_parameters") or {}
+    units.update({n: a["unit"] for n, a in added.items() if a.get("unit")})
+    page.verdict([d.get("verdict") or verdict(d), str(d.get("description") or "")])
     effect = d.get("effect")
+    page.heading("Summary")
     page.table(
         ["quantity", "value"],
         [
@@ -118,6 +141,9 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
             ["effect", effect if effect is not None else "none"],
             ["chi2 before", d.get("chi2_before")],
             ["chi2 after", d.get("chi2_after")],
+            ["likelihood-ratio p-value", d.get("lrt_p_value")],
+            ["number of data", d.get("n_data")],
+            ["family-wise false-alarm level", d.get("false_alarm")],
         ],
         table_id="diagnosis",
     )
@@ -133,12 +159,16 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
         ]
         page.table(["where", "value"], rows, caption="Location of the mismatch")
     page.table(
-        ["parameter", "before", "after"],
-        [[n, v.get("before"), v.get("after")] for n, v in d.get("parameters", {}).items()],
+        ["parameter", "unit", "before", "after"],
+        [
+            [n, units.get(n, "\u2014"), v.get("before"), v.get("after")]
+            for n, v in d.get("parameters", {}).items()
+        ],
         table_id="summary",
         caption="Free parameters before and after the augmentation",
     )
-    _tables(page, d)
+    _tables(page, d, units)
+    _whiteness(page, d)
     if problem is None:
         return
     try:
@@ -150,3 +180,15 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
     page.heading("Figures")
     for caption, fig in figures.items():
         page.figure(fig, f"diagnose_{caption}", caption)
+
+
+def _whiteness(page: HtmlPage, d: dict[str, Any]) -> None:
+    before = d.get("whiteness_before") or {}
+    after = d.get("whiteness_after") or {}
+    if not before:
+        return
+    page.table(
+        ["experiment / output", "Ljung-Box p before", "Ljung-Box p after"],
+        [[k.replace("/", " / "), v, after.get(k)] for k, v in before.items()],
+        caption="Are the weighted residuals white? (small p: structure left in them)",
+    )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -27,7 +27,15 @@ def environment() -> jinja2.Environment:
 
 
 def fmt(value: object, digits: int = 4) -> str:
-    """Format a cell value: numbers to ``digits`` significant digits, ``None`` as a dash."""
+    """Format a cell value: numbers to ``digits`` significant digits, ``None`` as a dash.
+
+    Mappings read ``key = value; ...`` and sequences ``a, b``, so that no Python literal
+    reaches a page.
+    """
+    if isinstance(value, Mapping):
+        return "; ".join(f"{k} = {fmt(v, digits)}" for k, v in value.items())
+    if isinstance(value, list | tuple | set):
+        return ", ".join(fmt(v, digits) for v in value)
     if value is None:
         return "\u2014"
     if isinstance(value, bool):

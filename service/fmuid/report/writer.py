@@ -93,12 +93,31 @@ def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | 
     page.heading("Summary")
     level = f"{result.confidence:.0%}"
     page.table(
-        ["parameter", "unit", "estimate", f"CI simultaneous ({level})",
-         f"CI pointwise ({level})", "label", "why", "quality", "bounds", "scale"],
         [
-            [name, units.get(name, "\u2014"), p.estimate, interval(p.ci_simultaneous),
-             interval(p.ci_pointwise), _label(p), p.status_reason or "\u2014",
-             quality_text(p.quality), interval((p.lower, p.upper)), p.scale]
+            "parameter",
+            "unit",
+            "estimate",
+            f"CI simultaneous ({level})",
+            f"CI pointwise ({level})",
+            "label",
+            "why",
+            "quality",
+            "bounds",
+            "scale",
+        ],
+        [
+            [
+                name,
+                units.get(name, "\u2014"),
+                p.estimate,
+                interval(p.ci_simultaneous),
+                interval(p.ci_pointwise),
+                _label(p),
+                p.status_reason or "\u2014",
+                quality_text(p.quality),
+                interval((p.lower, p.upper)),
+                p.scale,
+            ]
             for name, p in result.parameters.items()
         ],  # fmt: skip
         table_id="summary",
