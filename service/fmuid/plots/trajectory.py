@@ -145,6 +145,7 @@ def trajectory_band_figure(problem: Problem, result: ProfileResult, *, n: int = 
             ax.legend(fontsize=7)
     fig.suptitle(
         f"Trajectories over {len(sets)} parameter sets inside the "
-        f"{result.confidence:.0%} simultaneous CI (red), estimate (black), data (blue)"
+        f"{result.confidence:.0%} simultaneous CI\n(red), estimate (black), data (blue)",
+        fontsize=10,
     )
     return fig
