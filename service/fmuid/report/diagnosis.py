@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 from typing import Any
 
+from fmuid.diagnose.catalogue import study_catalogue
 from fmuid.diagnose.plots import figures as diagnose_figures
 from fmuid.diagnose.result import verdict
 from fmuid.errors import FmuidError
@@ -24,8 +25,19 @@ TEST_NAMES = {
 }
 
 
-def _params(values: dict[str, Any]) -> str:
-    return ", ".join(f"{k} = {fmt(v)}" for k, v in values.items())
+FIGURE_CAPTIONS = {
+    "fit": "Data, the base model and the augmented model, per experiment and output.",
+    "residuals": "Weighted residuals of both models; shaded: the located time windows.",
+    "spectrum": "Residual periodogram against the white-noise floor; shaded: the located band.",
+}
+
+
+def _params(values: dict[str, Any], units: dict[str, str]) -> str:
+    return ", ".join(f"{k} = {fmt(v)}{_space(units.get(k))}" for k, v in values.items())
+
+
+def _space(unit: str | None) -> str:
+    return f" {unit}" if unit else ""
 
 
 def _where(test: dict[str, Any]) -> str:
@@ -53,7 +65,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
     if ties:
         page.table(
             ["equally good effect", "parameters", "chi2", "test", "p-value"],
-            [[t["effect"], _params(t.get("parameters", {})), t.get("chi2"),
+            [[t["effect"], _params(t.get("parameters", {}), units), t.get("chi2"),
               str(t.get("test", "")).replace("_", " "), t.get("p_value")] for t in ties],
             caption="Explanations this data cannot tell apart from the named one",
         )  # fmt: skip
@@ -90,7 +102,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
             [
                 [
                     c["effect"],
-                    _params(c.get("parameters", {})),
+                    _params(c.get("parameters", {}), units),
                     c.get("chi2"),
                     c.get("statistic"),
                     c.get("p_value"),
@@ -127,7 +139,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
 def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) -> None:
     """Add the verdict, the tables and (with the problem) the figures of a diagnosis."""
     d = diagnosis.to_dict()
-    units = dict(problem.units()) if problem is not None else {}
+    units = _units(problem)
     units.update(d.get("units") or {})
     added = d.get("added_parameters") or {}
     units.update({n: a["unit"] for n, a in added.items() if a.get("unit")})
@@ -178,8 +190,18 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
         page.paragraph(f"Figures not drawn: {error}", note=True)
         return
     page.heading("Figures")
-    for caption, fig in figures.items():
-        page.figure(fig, f"diagnose_{caption}", caption)
+    for name, fig in figures.items():
+        page.figure(fig, f"diagnose_{name}", FIGURE_CAPTIONS.get(name, name))
+
+
+def _units(problem: Problem | None) -> dict[str, str]:
+    """Units of the problem's variables and of every catalogue parameter that declares one."""
+    if problem is None:
+        return {}
+    units = problem.units()
+    for candidate in study_catalogue(problem):
+        units.update({p.name: p.unit for p in candidate.parameters if p.unit})
+    return units
 
 
 def _whiteness(page: HtmlPage, d: dict[str, Any]) -> None:
