@@ -21,6 +21,8 @@ MIN_SPAN = 0.05
 """Smallest move of the profiled parameter (decades, or relative) over which a slope is read."""
 MIN_SLOPE = 0.1
 """Partners moving less than this (decades per decade) are left out."""
+TIE = 0.01
+"""Widths within this relative margin of the narrowest count as a tie: no design is marked."""
 SHORT = {"practically_non_identifiable": "PNI", "structurally_non_identifiable": "SNI"}
 
 
@@ -70,7 +72,8 @@ def advice_tables(cases: Sequence[StudyCase]) -> list[AdviceTable]:
     """Build one table per design from the profile studies.
 
     A cell is marked ``good`` where its design gave the narrowest finite interval of every
-    design at that SNR level, ``bad`` where the parameter is not identifiable.
+    design at that SNR level (by more than :data:`TIE`), ``bad`` where the parameter is not
+    identifiable.
 
     Parameters
     ----------
@@ -140,9 +143,10 @@ def _narrowest(
                 for d in designs
                 if (d, snr) in by_key
             }
-            finite = {d: w for d, w in widths.items() if math.isfinite(w)}
-            if finite:
-                out[(name, snr)] = min(finite, key=lambda d: finite[d])
+            finite = sorted((w, d) for d, w in widths.items() if math.isfinite(w))
+            tie = len(finite) > 1 and finite[1][0] <= finite[0][0] * (1 + TIE)
+            if finite and not tie:
+                out[(name, snr)] = finite[0][1]
     return out
 
 
