@@ -55,7 +55,9 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
     names = [e.name for e in experiments]
     if len(set(names)) != len(names):
         raise DataError(f"two data files share a name ({', '.join(names)}); rename one")
-    return fmu, experiments, load_spec(Path(args.spec))
+    from fmuid.formats.cli import apply_start
+
+    return fmu, experiments, apply_start(load_spec(Path(args.spec)), args.start)
 
 
 def _fmu_path(text: str) -> Path:
@@ -222,9 +224,14 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--spec", required=True, help="spec JSON")
         p.add_argument("--out", required=True, help="result JSON")
         p.add_argument("--report", help="write index.html and plots into this folder")
+        p.add_argument("--start", help="SSP parameter-value file (.ssv): start values")
         if name == "profile":
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")
         p.set_defaults(func=func)
+
+    from fmuid.formats.cli import add_commands
+
+    add_commands(sub)
 
     p = sub.add_parser("serve", help="run the HTTP service")
     p.add_argument("--host", default="127.0.0.1")

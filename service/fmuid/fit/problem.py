@@ -132,10 +132,10 @@ class Problem:
         }
 
     def units(self) -> dict[str, str]:
-        """Return the unit of each free parameter, input and output that the FMU declares."""
+        """Return the unit of each free and fixed parameter, input and output the FMU declares."""
         model = self.model
         declared = {**model.parameters, **model.inputs, **model.outputs}
-        names = [*self.names, *self.inputs, *self.outputs]
+        names = [*self.names, *self.spec.fixed, *self.inputs, *self.outputs]
         return {n: declared[n].unit or "" for n in names if n in declared and declared[n].unit}
 
     def representative_sigma(self) -> dict[str, float]:

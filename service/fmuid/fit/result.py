@@ -58,7 +58,7 @@ class FitResult:
     fmu_info
         How the FMU was run: ``fmi_version``, ``interface`` and ``input_handling``.
     units
-        Unit of each free parameter, input and output that declares one in the FMU.
+        Unit of each free and fixed parameter, input and output that declares one in the FMU.
 
     """
 
