@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import json
-import math
 import os
 import re
 from collections.abc import Mapping, Sequence
@@ -16,6 +15,7 @@ import yaml
 
 from fmuid.data import Experiment, experiment_from_arrays, spec_from_json
 from fmuid.errors import DataError, SpecError
+from fmuid.formats._common import finite_number
 from fmuid.formats.petab import FILES, PLACEHOLDER, PetabProblem
 
 
@@ -84,16 +84,6 @@ def _read_tsv(path: Path) -> list[dict[str, str]]:
         raise DataError(f"{path}: cannot read the table: {exc}") from exc
 
 
-def _float(text: str, where: str) -> float:
-    try:
-        value = float(text)
-    except ValueError as exc:
-        raise DataError(f"{where}: {text!r} is not a number") from exc
-    if not math.isfinite(value):
-        raise DataError(f"{where}: {text!r} is not finite")
-    return value
-
-
 def _outputs(
     path: Path, observables: Mapping[str, Mapping[str, str]]
 ) -> tuple[dict[str, dict[str, Any]], set[str]]:
@@ -119,7 +109,7 @@ def _outputs(
             sigma = "estimate"
             noise_params.add(formula)
         else:
-            sigma = _float(formula, f"{where}: noiseFormula")
+            sigma = finite_number(formula, f"{where}: noiseFormula")
         outputs[oid] = {"sigma": sigma}
     return outputs, noise_params
 
@@ -134,7 +124,7 @@ def _parameters(
         where = f"{FILES['parameter']}: parameter {pid}"
         if pid in noise_params:
             continue
-        nominal = _float(row.get("nominalValue", ""), f"{where}: nominalValue")
+        nominal = finite_number(row.get("nominalValue", ""), f"{where}: nominalValue")
         if row.get("estimate", "").lower() not in ("true", "1"):
             fixed[pid] = nominal
             continue
@@ -143,8 +133,8 @@ def _parameters(
         )
         entry = {
             "start": nominal,
-            "lower": _float(row.get("lowerBound", ""), f"{where}: lowerBound"),
-            "upper": _float(row.get("upperBound", ""), f"{where}: upperBound"),
+            "lower": finite_number(row.get("lowerBound", ""), f"{where}: lowerBound"),
+            "upper": finite_number(row.get("upperBound", ""), f"{where}: upperBound"),
         }
         free[pid] = entry | ({"scale": scale} if scale else {})
     return free, fixed
@@ -160,7 +150,7 @@ def _conditions(
             f"({', '.join(sorted(used))}); fmuid shares one set of fixed values across experiments"
         )
     return {
-        r["targetId"]: _float(r["targetValue"], f"{FILES['condition']}: {r['targetId']}")
+        r["targetId"]: finite_number(r["targetValue"], f"{FILES['condition']}: {r['targetId']}")
         for r in conditions
         if r.get("conditionId") in used
     }
@@ -175,18 +165,18 @@ def _experiments(
         samples: dict[str, dict[float, float]] = {}
         for r in tables["measurement"]:
             if r["experimentId"] == eid:
-                t = _float(r["time"], f"{FILES['measurement']}: {eid} time")
-                samples.setdefault(r["observableId"], {})[t] = _float(
+                t = finite_number(r["time"], f"{FILES['measurement']}: {eid} time")
+                samples.setdefault(r["observableId"], {})[t] = finite_number(
                     r["measurement"], f"{FILES['measurement']}: {eid}"
                 )
                 if outputs.get(r["observableId"], {}).get("sigma") == "column":
-                    samples.setdefault(f"sigma_{r['observableId']}", {})[t] = _float(
+                    samples.setdefault(f"sigma_{r['observableId']}", {})[t] = finite_number(
                         r["noiseParameters"], f"{FILES['measurement']}: {eid} noiseParameters"
                     )
         for r in tables["input"]:
             if r["experimentId"] == eid:
-                t = _float(r["time"], f"{FILES['input']}: {eid} time")
-                samples.setdefault(r["inputId"], {})[t] = _float(
+                t = finite_number(r["time"], f"{FILES['input']}: {eid} time")
+                samples.setdefault(r["inputId"], {})[t] = finite_number(
                     r["value"], f"{FILES['input']}: {eid}"
                 )
         times = np.array(sorted({t for column in samples.values() for t in column}))

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
@@ -21,6 +20,7 @@ from typing import Any
 
 from fmuid.data import Spec, spec_from_json
 from fmuid.errors import DataError, SpecError
+from fmuid.formats._common import finite_number
 
 logger = logging.getLogger(__name__)
 
@@ -286,13 +286,7 @@ def _value(source: Path, name: str, typed: ET.Element) -> float | bool | str:
         if text not in ("true", "false", "1", "0"):
             raise DataError(f"{source}: parameter '{name}': {text!r} is not a Boolean")
         return text in ("true", "1")
-    try:
-        number = float(text)
-    except ValueError as exc:
-        raise DataError(f"{source}: parameter '{name}': {text!r} is not a number") from exc
-    if not math.isfinite(number):
-        raise DataError(f"{source}: parameter '{name}': value {text!r} is not finite")
-    return number
+    return finite_number(text, f"{source}: parameter '{name}'")
 
 
 def _opt(element: ET.Element, key: str) -> float | None:
