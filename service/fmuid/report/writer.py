@@ -227,6 +227,7 @@ def _study_numbers(
         [f"sigma {o}", f"{fmt(v)}{_space(fit.units.get(o))} ({fit.sigma_method.get(o, '')})"]
         for o, v in fit.sigma.items()
     ]
+    rows += [[f"fixed {n}", f"{fmt(v)}{_space(fit.units.get(n))}"] for n, v in fit.fixed.items()]
     rows += [
         ["global search", fit.global_search],
         ["simulations", int(cost["simulations"])],
