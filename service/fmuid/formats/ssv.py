@@ -3,7 +3,7 @@
 The file is an ``ssv:ParameterSet`` (SSP 2.0 keeps the ``SSP1`` namespaces) with one
 ``ssv:Parameter`` per free and fixed FMU parameter, its value as ``ssv:Real`` (``ssv:Boolean``,
 ``ssv:String``) with the FMU's unit, the units' SI exponents in ``ssv:Units``, and what has no
-SSV element (bounds, scale, intervals, label) in ``ssc:Annotation`` elements of type
+SSV element (bounds, scale, intervals, label) in ``ssv:Annotations/ssc:Annotation`` of type
 ``org.fmuid.estimate`` (per parameter) and ``org.fmuid.study`` (per set). See docs/formats.md.
 """
 
@@ -154,7 +154,7 @@ def write_ssv(
         "nData": _num(d.get("n_data")),
         "sigma": json.dumps(d.get("sigma") or {}),
     }
-    annotations = ET.SubElement(root, f"{{{SSC}}}Annotations")
+    annotations = ET.SubElement(root, f"{{{SSV}}}Annotations")
     annotation = ET.SubElement(annotations, f"{{{SSC}}}Annotation", type=STUDY_TYPE)
     ET.SubElement(annotation, f"{{{FMUID}}}Study", {k: v for k, v in study.items() if v})
     out = Path(path)
@@ -227,7 +227,7 @@ def _estimate_annotation(
         "status": entry.get("status") or "",
         "statusReason": entry.get("status_reason") or "",
     }
-    annotations = ET.SubElement(element, f"{{{SSC}}}Annotations")
+    annotations = ET.SubElement(element, f"{{{SSV}}}Annotations")
     annotation = ET.SubElement(annotations, f"{{{SSC}}}Annotation", type=ESTIMATE_TYPE)
     est = ET.SubElement(annotation, f"{{{FMUID}}}Estimate", {k: v for k, v in attrs.items() if v})
     for kind, ends in (entry.get("ci") or {}).items():
@@ -264,10 +264,10 @@ def read_ssv(path: str | os.PathLike[str]) -> ParameterSet:
         values[pname] = _value(source, pname, typed)
         if typed.get("unit"):
             units[pname] = typed.get("unit") or ""
-        est = p.find(f"{{{SSC}}}Annotations/{{{SSC}}}Annotation[@type='{ESTIMATE_TYPE}']/")
+        est = _annotation(p, ESTIMATE_TYPE)
         if est is not None:
             estimates[pname] = _read_estimate(est)
-    study = root.find(f"{{{SSC}}}Annotations/{{{SSC}}}Annotation[@type='{STUDY_TYPE}']/")
+    study = _annotation(root, STUDY_TYPE)
     return ParameterSet(
         root.get("name") or source.stem,
         values,
@@ -275,6 +275,15 @@ def read_ssv(path: str | os.PathLike[str]) -> ParameterSet:
         estimates,
         dict(study.attrib) if study is not None else {},
     )
+
+
+def _annotation(element: ET.Element, kind: str) -> ET.Element | None:
+    """First child of the annotation of type ``kind`` (``ssv:Annotations``; SSP 1.0: ``ssc:``)."""
+    for ns in (SSV, SSC):
+        found = element.find(f"{{{ns}}}Annotations/{{{SSC}}}Annotation[@type='{kind}']/")
+        if found is not None:
+            return found
+    return None
 
 
 def _value(source: Path, name: str, typed: ET.Element) -> float | bool | str:
