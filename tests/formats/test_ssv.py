@@ -91,6 +91,11 @@ def test_start_value_outside_the_bounds_names_file_and_parameter(profiled):
         with_start_values(spec, {"k": "stiff"}, "p.ssv")
 
 
+def test_a_diagnosis_is_not_a_parameter_set(tmp_path):
+    with pytest.raises(DataError, match="parameter 'k' has no estimate"):
+        write_ssv({"parameters": {"k": {"before": 1.0, "after": 2.0}}}, tmp_path / "d.ssv")
+
+
 def test_not_an_ssv_file(tmp_path):
     bad = tmp_path / "x.ssv"
     bad.write_text("<root/>")

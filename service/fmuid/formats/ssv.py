@@ -126,6 +126,8 @@ def write_ssv(
     params = ET.SubElement(root, f"{{{SSV}}}Parameters")
     used: set[str] = set()
     for pname, entry in d["parameters"].items():
+        if not isinstance(entry, Mapping) or "estimate" not in entry:
+            raise DataError(f"parameter '{pname}' has no estimate: not a fit or profile result")
         unit = units.get(pname)
         element = _parameter(params, pname, float(entry["estimate"]), unit)
         used |= {unit} if unit else set()
