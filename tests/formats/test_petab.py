@@ -148,3 +148,25 @@ def test_an_estimated_sigma_becomes_a_noise_parameter_and_back(study, msd_fmu, t
     back = read_petab(problem)
     assert back.spec.outputs["x"].sigma == "estimate"
     assert set(back.spec.parameters) == {"k", "b"}
+
+
+def test_tractor_steer_angle_sampled_faster_than_the_yaw_rates(tractor_fmu, tmp_path):
+    import fieldtruth as ft
+    from fmuid.stages import make_problem
+    from operational import study_spec
+
+    experiments = ft.make_case(None, seed=3, rate=5.0).experiments
+    spec = study_spec()
+    back = read_petab(write_petab(tmp_path / "p", tractor_fmu, experiments, spec))
+    inputs = _tsv(tmp_path / "p" / "inputs.tsv")
+    # delta in every row (201 + 301), the yaw rates in every other row only
+    assert len(inputs) == 201 + 301 and {r["inputId"] for r in inputs} == {"delta"}
+    assert len(_tsv(tmp_path / "p" / "measurements.tsv")) == 2 * (101 + 151)
+    for a, b in zip(experiments, back.experiments, strict=True):
+        assert set(a.columns) == set(b.columns)
+        for column in a.columns:
+            np.testing.assert_array_equal(a.columns[column], b.columns[column])
+    original = make_problem(tractor_fmu, experiments, spec)
+    imported = make_problem(back.fmu, back.experiments, back.spec)
+    start = {n: p.start for n, p in spec.parameters.items()}
+    assert imported.chi2(imported.to_z(start)) == original.chi2(original.to_z(start))
