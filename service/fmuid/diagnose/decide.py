@@ -90,9 +90,7 @@ def min_p_adjusted(fits: Sequence[CandidateFit], seed: int) -> list[float]:
     return out
 
 
-def weighted_holm(
-    tests: Sequence[tuple[TestResult, float]], alpha: float
-) -> list[TestResult]:
+def weighted_holm(tests: Sequence[tuple[TestResult, float]], alpha: float) -> list[TestResult]:
     """Return the tests that Holm's weighted step-down procedure rejects at level ``alpha``.
 
     Parameters
