@@ -54,8 +54,10 @@ def load_result(path: str | Path) -> Any:
         raise SpecError(f"{path}: a result JSON is an object, not {type(data).__name__}")
     try:
         return result_from_dict(data)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise SpecError(f"{path}: not a complete fmuid result (at {exc!r})") from exc
+    except KeyError as exc:
+        raise SpecError(f"{path}: not a complete fmuid result: missing key {exc}") from exc
+    except (TypeError, ValueError) as exc:
+        raise SpecError(f"{path}: not a complete fmuid result: {exc}") from exc
 
 
 def result_from_dict(data: dict[str, Any]) -> Any:
