@@ -1,4 +1,4 @@
-"""The built wheel, installed with the service extra into a fresh venv, works outside the repository.
+"""The built wheel with the service extra, in a fresh venv, works outside the repository.
 
 Slow: pip builds the wheel and installs the pinned dependencies (constraints.txt) from PyPI or
 pip's cache into a new virtual environment.
