@@ -291,14 +291,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         level=logging.DEBUG if args.verbose else logging.WARNING if quiet else logging.INFO,
         handlers=[log_handler(tty)],
     )
-    if args.command != "serve":
-        exit_on_interrupt()
+    if argv is None and args.command != "serve":
+        exit_on_interrupt()  # the console script only: a caller of main() keeps its own handler
     func: Callable[[argparse.Namespace], int] = args.func
     try:
         return func(args)
     except (DataError, SpecError, FmuError) as exc:
         sys.stderr.write(f"fmuid {args.command}: error: {exc}\n")
         return EXIT_BAD_INPUT
+    except BrokenPipeError:
+        sys.stderr.close()  # the reader (e.g. `| head`) is gone: nothing left to say
+        return EXIT_OK
     except KeyboardInterrupt:
         sys.stderr.write("interrupted\n")
         return EXIT_INTERRUPTED
