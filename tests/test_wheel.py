@@ -29,15 +29,22 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
+def _clean_env() -> dict[str, str]:
+    """The environment without fmuid settings and PYTHONPATH (which would show the source tree)."""
+    return {k: v for k, v in os.environ.items() if not k.startswith(("FMUID_", "PYTHON"))}
+
+
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory):
     """A fresh venv holding the wheel with the service extra; returns its bin folder."""
     root = tmp_path_factory.mktemp("wheel")
+    env = _clean_env()
     dist = root / "dist"
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", dist, REPO],
         check=True,
         timeout=600,
+        env=env,
     )
     (wheel,) = dist.glob("fmuid-*.whl")
     venv.create(root / "venv", with_pip=True)
@@ -47,13 +54,17 @@ def installed(tmp_path_factory):
         + [f"{wheel}[service]"],
         check=True,
         timeout=1500,
+        env=env,
     )
     return bin_dir
 
 
 def _env(tmp_path: Path) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("FMUID_", "PYTHON"))}
-    return {**env, "XDG_CACHE_HOME": str(tmp_path / "cache"), "XDG_DATA_HOME": str(tmp_path)}
+    return {
+        **_clean_env(),
+        "XDG_CACHE_HOME": str(tmp_path / "cache"),
+        "XDG_DATA_HOME": str(tmp_path),
+    }
 
 
 def test_installed_wheel_runs_info_fit_and_serve(installed, tmp_path):
