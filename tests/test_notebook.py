@@ -4,6 +4,7 @@ import json
 import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.figure import Figure
@@ -96,3 +97,22 @@ def test_readme_python_examples_run(study_dir):
         exec(compile(block, str(README), "exec"), namespace)  # noqa: S102
     assert namespace["table"].loc["k", "unit"] == "N/m"
     assert namespace["again"].to_dict() == namespace["result"].to_dict()
+
+
+def test_a_diagnosis_loads_back_equal(study_dir):
+    # the sensor reads 0.3 m too much: a mismatch for the catalogue to explain
+    table = np.genfromtxt("step.csv", delimiter=",", names=True)
+    rows = ["time,f,x"] + [
+        f"{float(t)!r},40,{float(x) + 0.3!r}" for t, x in zip(table["time"], table["x"])
+    ]
+    Path("biased.csv").write_text("\n".join(rows) + "\n")
+    diagnosis = fmuid.diagnose("msd", [load_experiment("biased.csv")], load_spec("spec.json"))
+    assert diagnosis.mismatch and diagnosis.added_parameters and diagnosis.windows
+    path = study_dir / "diagnosis.json"
+    path.write_text(json.dumps(diagnosis.to_dict()))
+    loaded = fmuid.load_result(path)
+    assert type(loaded) is type(diagnosis)
+    assert loaded.to_dict() == diagnosis.to_dict()
+    pd.testing.assert_frame_equal(loaded.to_frame(), diagnosis.to_frame())
+    frame = diagnosis.to_frame()
+    assert set(frame.index) >= {"k", "b", *diagnosis.added_parameters}
