@@ -81,7 +81,10 @@ def _design_from_dict(data: dict[str, Any]) -> Any:
         module = importlib.import_module("fmuid.design.result")
     except ImportError as exc:
         raise SpecError("design results need fmuid.design, which this fmuid lacks") from exc
-    return module.DesignResult.from_dict(data)
+    reader = getattr(getattr(module, "DesignResult", None), "from_dict", None)
+    if reader is None:
+        raise SpecError("this fmuid cannot read design results back (no DesignResult.from_dict)")
+    return reader(data)
 
 
 def _cost(data: dict[str, Any] | None) -> Cost:
