@@ -67,6 +67,9 @@ class ProgressDisplay:
         self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         if self._bar is not None:
+            if kind is None:  # the stage finished: its estimate of the work left is moot
+                for task in self._bar.tasks:
+                    self._bar.update(task.id, completed=task.total)
             self._bar.stop()
 
     def __call__(self, event: Progress) -> None:
@@ -143,11 +146,10 @@ def profile_table(result: ProfileResult) -> str:
         f"{level} pointwise",
         "label",
     ]
-    return (
-        f"{table(header, rows)}\n"
-        f"chi2 {result.chi2:.6g} with {result.fit.n_data} data points; "
-        f"'{OPEN}': the profile stays below the threshold up to the parameter's bound"
-    )
+    text = f"{table(header, rows)}\nchi2 {result.chi2:.6g} with {result.fit.n_data} data points"
+    if any(OPEN in row[3] + row[4] for row in rows):
+        text += f"\n'{OPEN}': the profile stays below the threshold up to the parameter's bound"
+    return text
 
 
 def info_text(info: ModelInfo) -> str:

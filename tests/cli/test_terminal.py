@@ -100,6 +100,10 @@ def test_profile_table_has_header_level_units_and_open_ends():
     assert lines[3].split()[:4] == ["k", "10", "N/m", "[2.5,"]
     assert lines[3].split()[4] == "open]"
     assert "null" not in "\n".join(lines)
+    assert lines[-1].startswith("'open': ")
+    k = dataclasses.replace(k, ci_simultaneous=(2.5, 40.0), ci_pointwise=(5.0, 20.0))
+    closed = dataclasses.replace(result, parameters={"k": k})
+    assert "open" not in profile_table(closed)
 
 
 def test_progress_is_log_lines_off_a_terminal(caplog):
@@ -115,8 +119,11 @@ def test_progress_bar_on_a_terminal(capsys):
     with ProgressDisplay(tty=True) as show:
         show(Progress("fit", 3, 10))
         show(Progress("profile", 10, 10, "done"))
+        show(Progress("profile", 12, 30, "the walk ended early"))
         tasks = {t.description: (t.completed, t.total) for t in show._bar.tasks}
-    assert tasks == {"fit": (3, 10), "profile": (10, 10)}
+        assert tasks == {"fit": (3, 10), "profile": (12, 30)}
+    # a finished stage shows a full bar
+    assert [(t.completed, t.total) for t in show._bar.tasks] == [(10, 10), (30, 30)]
 
 
 def test_help_and_version_are_for_users():
