@@ -7,7 +7,6 @@ throttled log lines instead of the bar.
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
 import signal
 import sys
@@ -187,6 +186,8 @@ def info_text(info: ModelInfo) -> str:
 
 def _stop_now(signum: int, frame: FrameType | None) -> None:
     """End at once on Ctrl-C: terminate our worker processes, then exit with status 130."""
+    import multiprocessing
+
     children = multiprocessing.active_children()
     for child in children:
         child.terminate()
