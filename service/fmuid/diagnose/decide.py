@@ -119,9 +119,7 @@ def min_p(fits: Sequence[Scored], seed: int) -> list[float]:
     return out
 
 
-def weighted_holm(
-    tests: Sequence[tuple[TestResult, float]], alpha: float
-) -> list[TestResult]:
+def weighted_holm(tests: Sequence[tuple[TestResult, float]], alpha: float) -> list[TestResult]:
     """Return the tests that Holm's weighted step-down procedure rejects at level ``alpha``.
 
     Parameters

@@ -176,7 +176,10 @@ def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
     """Profile-likelihood intervals of an equally good candidate's added parameters."""
     tie_fit = _fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
     prof = profile_problem(
-        tie.problem, tie_fit, only=list(tie.candidate.names), workers=run.opts.workers,
+        tie.problem,
+        tie_fit,
+        only=list(tie.candidate.names),
+        workers=run.opts.workers,
         options=run.opts.walk,
     )
     run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
@@ -313,8 +316,11 @@ def diagnose_problem(
                 best, applied, aug, z = alone, [top.candidate], alone.problem, alone.z
                 final_fit = _fit_of(aug, z, alone.chi2, run.t0)
             else:
-                applied, aug, z, second = [best.candidate, top.candidate], top.problem, top.z, (
-                    top.candidate.effect
+                applied, aug, z, second = (
+                    [best.candidate, top.candidate],
+                    top.problem,
+                    top.z,
+                    (top.candidate.effect),
                 )
                 final_fit = _fit_of(aug, z, top.chi2, run.t0)
             tests_after = _tests_after(aug, final_fit, seed_after)

@@ -183,6 +183,12 @@ class Diagnosis:
         }
         return {"verdict": verdict(out), **out}
 
+    def to_frame(self) -> Any:
+        """Return a pandas table of the parameters before and after, and the added ones."""
+        from fmuid.results import to_frame
+
+        return to_frame(self)
+
 
 def verdict(d: dict[str, Any]) -> str:
     """One sentence from a diagnosis' JSON: mismatch or not, what explains it, how strongly."""
