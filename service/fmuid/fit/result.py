@@ -122,6 +122,7 @@ class FitResult:
                     "lower": float(self.lower[n]),
                     "upper": float(self.upper[n]),
                     "scale": s,
+                    "unit": self.units.get(n, ""),
                     "at_bound": bool(
                         np.isclose(self.estimates[n], self.lower[n], rtol=1e-6)
                         or np.isclose(self.estimates[n], self.upper[n], rtol=1e-6)
@@ -135,3 +136,9 @@ class FitResult:
             "cost": self.cost.to_dict(),
             "units": dict(self.units),
         }
+
+    def to_frame(self) -> Any:
+        """Return a pandas table of the estimates, one row per free parameter (needs pandas)."""
+        from fmuid.results import to_frame
+
+        return to_frame(self)
