@@ -23,6 +23,18 @@ logger = logging.getLogger(__name__)
 
 CO_SIMULATION = "CoSimulation"
 MODEL_EXCHANGE = "ModelExchange"
+INTERFACES: dict[str | None, str | None] = {
+    None: None,
+    "auto": None,
+    "co_simulation": CO_SIMULATION,
+    "model_exchange": MODEL_EXCHANGE,
+    CO_SIMULATION: CO_SIMULATION,
+    MODEL_EXCHANGE: MODEL_EXCHANGE,
+}
+"""Accepted names of the interface to drive (the spec's spelling and FMI's); auto/None:
+co-simulation when the FMU has it, else model exchange."""
+SPEC_NAMES = {CO_SIMULATION: "co_simulation", MODEL_EXCHANGE: "model_exchange"}
+"""The spec's name of each FMI interface."""
 
 FLOAT_TYPES = frozenset({"Real", "Float64", "Float32"})
 INTEGER_TYPES = frozenset(
@@ -177,8 +189,9 @@ class FmuModel:
     path
         The ``.fmu`` file.
     interface
-        ``"CoSimulation"`` or ``"ModelExchange"``; default: co-simulation when the FMU has it
-        (its own solver, as its exporter tuned it), else model exchange.
+        ``"co_simulation"`` (or ``"CoSimulation"``), ``"model_exchange"`` (or
+        ``"ModelExchange"``), or ``"auto"``/None: co-simulation when the FMU has it (its own
+        solver, as its exporter tuned it), else model exchange.
 
     Attributes
     ----------
@@ -329,15 +342,23 @@ def _choose_interface(path: Path, description: ModelDescription, wanted: str | N
                            (MODEL_EXCHANGE, description.modelExchange))
         if part is not None
     ]  # fmt: skip
-    if wanted is not None and wanted not in (CO_SIMULATION, MODEL_EXCHANGE):
-        raise FmuError(f"unknown FMI interface {wanted!r}: use CoSimulation or ModelExchange")
+    if wanted not in INTERFACES:
+        raise FmuError(
+            f"unknown FMI interface {wanted!r}: use one of "
+            + ", ".join(repr(k) for k in INTERFACES if k is not None)
+        )
     if not available:
         raise FmuError(
             f"{path}: the FMU has neither a co-simulation nor a model-exchange interface "
             "(scheduled execution is not supported)"
         )
-    if wanted is None:
+    chosen = INTERFACES[wanted]
+    if chosen is None:
         return available[0]
-    if wanted not in available:
-        raise FmuError(f"{path}: the FMU has no {wanted} interface (it has {available[0]})")
-    return wanted
+    if chosen not in available:
+        raise FmuError(
+            f"{path}: the FMU has no {SPEC_NAMES[chosen]} interface "
+            f"(it has {SPEC_NAMES[available[0]]}); use interface \"auto\" or "
+            f"\"{SPEC_NAMES[available[0]]}\""
+        )
+    return chosen

@@ -1,0 +1,227 @@
+"""Simulations of an FMU with an unreliable reset, in a process replaced every so many runs.
+
+When a run after ``fmi2Reset``/``fmi3Reset`` differs from a fresh instance's run, every run needs
+a fresh instance, and some exporters fail after about a thousand instantiations in one process
+(memory or global state their ``FreeInstance`` does not give back). :class:`HostedSimulator`
+therefore runs a :class:`~fmuid.model.simulator.Simulator` with a fresh instance per run in a
+child process and replaces that process after ``FMUID_RECYCLE_RUNS`` runs (default
+:data:`RECYCLE_RUNS`). The child is forked (cheap: no imports) and loads its own copy of the
+FMU's library, extracted to its own folder, so the library's global state starts afresh in
+every child even when this process has loaded the FMU before.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import os
+import weakref
+from collections.abc import Mapping, Sequence
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fmuid.errors import FmuError, FmuidError
+from fmuid.model.fmu import FmuModel
+from fmuid.model.simulator import INPUT_STEP, Simulator, input_handling
+
+logger = logging.getLogger(__name__)
+
+RECYCLE_RUNS = 500
+"""Default number of runs after which the simulation process is replaced."""
+RECYCLE_ENV = "FMUID_RECYCLE_RUNS"
+"""Environment variable that sets the number of runs per simulation process."""
+STOP_TIMEOUT = 5.0
+"""Seconds a retiring simulation process gets to exit before it is killed."""
+
+
+def recycle_runs() -> int:
+    """Return the runs per simulation process: ``FMUID_RECYCLE_RUNS`` or :data:`RECYCLE_RUNS`.
+
+    Raises
+    ------
+    FmuidError
+        If the variable is set to anything but a positive whole number.
+
+    """
+    text = os.environ.get(RECYCLE_ENV, "").strip()
+    if not text:
+        return RECYCLE_RUNS
+    try:
+        runs = int(text)
+    except ValueError:
+        runs = 0
+    if runs < 1:
+        raise FmuidError(f"{RECYCLE_ENV}={text!r}: give a positive whole number of runs")
+    return runs
+
+
+class HostedSimulator:
+    """A simulator whose runs happen in a child process, with a fresh FMU instance each.
+
+    It has the interface of :class:`~fmuid.model.simulator.Simulator` that the engine uses
+    (``simulate``, ``model``, ``input_handling``, ``instances``, ``reset_reliable``, ``close``).
+
+    Parameters
+    ----------
+    path
+        The ``.fmu`` file.
+    interface
+        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"``/None.
+    input_step
+        Longest sub-step [s] for co-simulation FMUs without input derivatives.
+    runs_per_process
+        Runs after which the child process is replaced; default :func:`recycle_runs`.
+
+    Attributes
+    ----------
+    processes
+        Child processes started so far.
+
+    """
+
+    reset_reliable = False
+
+    def __init__(
+        self,
+        path: str | Path,
+        interface: str | None = None,
+        input_step: float = INPUT_STEP,
+        runs_per_process: int | None = None,
+    ) -> None:
+        self.model = FmuModel(path, interface)
+        self.path = self.model.path
+        self.interface = interface
+        self.input_step = float(input_step)
+        self.runs_per_process = runs_per_process or recycle_runs()
+        self.processes = 0
+        self._runs = 0
+        self._child: _Child | None = None
+
+    @property
+    def input_handling(self) -> str:
+        """How inputs reach this FMU between their samples (for results and logs)."""
+        return input_handling(self.model, self.input_step)
+
+    @property
+    def instances(self) -> str:
+        """How runs get their FMU instance (for results and logs)."""
+        return (
+            "a fresh instance per run (its reset is unreliable), in a process replaced every "
+            f"{self.runs_per_process} runs"
+        )
+
+    def simulate(
+        self,
+        params: Mapping[str, float | str],
+        input_time: np.ndarray,
+        input_values: Mapping[str, np.ndarray],
+        output_time: np.ndarray,
+        outputs: Sequence[str],
+    ) -> np.ndarray:
+        """Simulate once in the child process; as :meth:`Simulator.simulate`."""
+        if self._child is None or self._runs >= self.runs_per_process:
+            self._replace_child()
+        assert self._child is not None
+        self._runs += 1
+        request = (dict(params), input_time, dict(input_values), output_time, list(outputs))
+        try:
+            self._child.conn.send(request)
+            kind, *answer = self._child.conn.recv()
+        except (EOFError, OSError) as exc:
+            code = self._child.stop()
+            self._child = None
+            raise FmuError(
+                f"FMU {self.model.model_name}: the simulation process died during a run "
+                f"(exit code {code})",
+                function="simulate",
+            ) from exc
+        if kind == "ok":
+            result: np.ndarray = answer[0]
+            return result
+        if kind == "fmu":
+            raise FmuError(answer[0], function=answer[1], status=answer[2])
+        raise ValueError(answer[0])
+
+    def _replace_child(self) -> None:
+        if self._child is not None:
+            self._child.stop()
+        self._child = _Child(self.path, self.interface, self.input_step)
+        self.processes += 1
+        self._runs = 0
+        logger.debug("%s: simulation process %d started", self.model.model_name, self.processes)
+
+    def close(self) -> None:
+        """Stop the child process."""
+        if self._child is not None:
+            self._child.stop()
+            self._child = None
+
+
+class _Child:
+    """One simulation process and the parent's end of its pipe."""
+
+    def __init__(self, path: Path, interface: str | None, input_step: float) -> None:
+        ctx = multiprocessing.get_context("fork")
+        self.conn, child_conn = ctx.Pipe()
+        self.process: Any = ctx.Process(
+            target=_serve,
+            args=(child_conn, str(path), interface, input_step),
+            name="fmuid-simulation",
+            daemon=True,
+        )
+        self.process.start()
+        child_conn.close()
+        self._finalizer = weakref.finalize(self, _stop, self.conn, self.process, os.getpid())
+
+    def stop(self) -> int | None:
+        """Ask the process to exit, kill it if it does not, and return its exit code."""
+        self._finalizer.detach()
+        return _stop(self.conn, self.process, os.getpid())
+
+
+def _stop(conn: Connection, process: Any, owner: int) -> int | None:
+    if os.getpid() != owner:  # a forked copy: the process belongs to the parent
+        return None
+    try:
+        conn.send(None)
+    except (OSError, ValueError):
+        pass
+    process.join(STOP_TIMEOUT)
+    if process.is_alive():
+        process.kill()
+        process.join()
+    conn.close()
+    code: int | None = process.exitcode
+    return code
+
+
+def _serve(conn: Connection, path: str, interface: str | None, input_step: float) -> None:
+    """Child process: answer simulation requests until ``None`` or the parent's end closes."""
+    simulator: Simulator | None = None
+    failure: tuple[str | None, ...] | None = None
+    try:
+        simulator = Simulator(path, interface, input_step, reset_reliable=False)
+    except FmuError as exc:
+        failure = ("fmu", str(exc), exc.function, exc.status)
+    while True:
+        try:
+            request = conn.recv()
+        except (EOFError, OSError):
+            break
+        if request is None:
+            break
+        if simulator is None:
+            conn.send(failure)
+            continue
+        try:
+            conn.send(("ok", simulator.simulate(*request)))
+        except FmuError as exc:
+            conn.send(("fmu", str(exc), exc.function, exc.status))
+        except (FmuidError, ValueError) as exc:
+            conn.send(("value", str(exc)))
+    if simulator is not None:
+        simulator.close()
+    conn.close()
