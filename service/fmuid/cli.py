@@ -55,7 +55,10 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
     names = [e.name for e in experiments]
     if len(set(names)) != len(names):
         raise DataError(f"two data files share a name ({', '.join(names)}); rename one")
-    return fmu, experiments, load_spec(Path(args.spec))
+    spec = load_spec(Path(args.spec))
+    if args.interface:
+        spec = spec.model_copy(update={"interface": args.interface})
+    return fmu, experiments, spec
 
 
 def _fmu_path(text: str) -> Path:
@@ -84,11 +87,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from fmuid.model.simulator import Simulator
 
     fmu = _fmu_path(args.fmu)
-    model = FmuModel(fmu)
+    spec = load_spec(Path(args.spec)) if args.spec else None
+    interface = args.interface or (spec.interface if spec else "auto")
+    model = FmuModel(fmu, interface)
     experiment = load_experiment(Path(args.data))
     params: dict[str, float | str] = {}
-    if args.spec:
-        spec = load_spec(Path(args.spec))
+    if spec:
         params.update(spec.fixed)
         params.update({n: p.start for n, p in spec.parameters.items()})
         unknown = sorted(set(params) - set(model.parameters))
@@ -115,7 +119,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if not outputs:
         types = ", ".join(f"{n} ({v.type_label})" for n, v in model.outputs.items()) or "none"
         raise FmuError(f"{fmu}: no output fmuid can read (its outputs: {types})")
-    y = Simulator(fmu).simulate(params, input_time, input_values, experiment.time, outputs)
+    simulator = Simulator(fmu, interface)
+    y = simulator.simulate(params, input_time, input_values, experiment.time, outputs)
+    log.info("%s; %s", model.kind_label, simulator.input_handling)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     table = np.column_stack([experiment.time, y])
@@ -194,6 +200,15 @@ def _fmt(v: float | None) -> str:
     return "null" if v is None else f"{v:.6g}"
 
 
+def _interface_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--interface",
+        choices=("auto", "co_simulation", "model_exchange"),
+        help="FMI interface of an FMU that has both (default: the spec's, else auto = "
+        "co-simulation)",
+    )
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fmuid", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
@@ -209,6 +224,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--data", required=True, help="CSV with time and input columns")
     p.add_argument("--spec", help="spec JSON: parameter values (start and fixed)")
     p.add_argument("--out", required=True, help="output CSV")
+    _interface_option(p)
     p.set_defaults(func=_cmd_simulate)
 
     for name, func, text in (
@@ -222,6 +238,7 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--spec", required=True, help="spec JSON")
         p.add_argument("--out", required=True, help="result JSON")
         p.add_argument("--report", help="write index.html and plots into this folder")
+        _interface_option(p)
         if name == "profile":
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")
         p.set_defaults(func=func)

@@ -203,6 +203,8 @@ class FmuModel:
         From ``modelDescription.xml`` (``guid`` is the FMI 3.0 ``instantiationToken``).
     interface
         The FMI interface fmuid drives: ``CoSimulation`` or ``ModelExchange``.
+    interfaces
+        The FMI interfaces the FMU has (of those two).
     model_description
         fmpy's parsed model description.
     parameters, inputs, outputs
@@ -233,7 +235,13 @@ class FmuModel:
                 f"{self.path}: cannot read modelDescription.xml (FMI {version}): {exc}"
             ) from exc
         self.model_description: ModelDescription = description
-        self.interface = _choose_interface(self.path, description, interface)
+        self.interfaces = tuple(
+            name
+            for name, part in ((CO_SIMULATION, description.coSimulation),
+                               (MODEL_EXCHANGE, description.modelExchange))
+            if part is not None
+        )  # fmt: skip
+        self.interface = _choose_interface(self.path, self.interfaces, interface)
         self.model_name: str = description.modelName
         self.fmi_version: str = version
         self.guid: str = description.guid or description.instantiationToken or ""
@@ -335,13 +343,7 @@ def _article(word: str) -> str:
     return ("an " if word[0].upper() in "AEIOU" else "a ") + word
 
 
-def _choose_interface(path: Path, description: ModelDescription, wanted: str | None) -> str:
-    available = [
-        name
-        for name, part in ((CO_SIMULATION, description.coSimulation),
-                           (MODEL_EXCHANGE, description.modelExchange))
-        if part is not None
-    ]  # fmt: skip
+def _choose_interface(path: Path, available: tuple[str, ...], wanted: str | None) -> str:
     if wanted not in INTERFACES:
         raise FmuError(
             f"unknown FMI interface {wanted!r}: use one of "
@@ -358,7 +360,7 @@ def _choose_interface(path: Path, description: ModelDescription, wanted: str | N
     if chosen not in available:
         raise FmuError(
             f"{path}: the FMU has no {SPEC_NAMES[chosen]} interface "
-            f"(it has {SPEC_NAMES[available[0]]}); use interface \"auto\" or "
-            f"\"{SPEC_NAMES[available[0]]}\""
+            f'(it has {SPEC_NAMES[available[0]]}); use interface "auto" or '
+            f'"{SPEC_NAMES[available[0]]}"'
         )
     return chosen

@@ -383,5 +383,5 @@ def get_simulator(path: str | Path, interface: str | None = None) -> Simulator |
 
 
 def _interface(interface: str | None) -> str | None:
-    """The FMI name of an interface option (None for auto); unknown names pass to FmuModel."""
+    """Return the FMI name of an interface option (None for auto); unknown names pass through."""
     return INTERFACES.get(interface, interface)
