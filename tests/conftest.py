@@ -30,3 +30,16 @@ def msd_fmu(built_fmus: dict[str, Path]) -> Path:
 @pytest.fixture(scope="session")
 def msd_parallel_fmu(built_fmus: dict[str, Path]) -> Path:
     return built_fmus["msd_parallel"]
+
+
+@pytest.fixture(scope="session")
+def first_order_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tests/pythonfmu_src/first_order.py`` built by pythonfmu: a second FMI 2.0 exporter."""
+    pythonfmu = pytest.importorskip(
+        "pythonfmu", reason="pythonfmu is not installed (pip install -e '.[dev]')"
+    )
+    if not pythonfmu.FmuBuilder.has_binary():
+        pytest.skip("pythonfmu ships no FMU binary for this platform")
+    source = Path(__file__).parent / "pythonfmu_src" / "first_order.py"
+    out = tmp_path_factory.mktemp("pythonfmu")
+    return Path(pythonfmu.FmuBuilder.build_FMU(source, dest=out))

@@ -369,7 +369,9 @@ def get_simulator(path: str | Path, interface: str | None = None) -> Simulator |
     wanted = _interface(interface)
     key = (str(resolved), wanted, mtime, thread)
     simulator = _CACHE.get(key)
-    if isinstance(simulator, Simulator) and simulator.reset_reliable is False:
+    if isinstance(simulator, Simulator) and (
+        simulator.reset_reliable is False or key[:2] in _UNRELIABLE
+    ):
         mark_reset_unreliable(resolved, wanted)
         _CACHE.pop(key).close()
         simulator = None

@@ -1,8 +1,9 @@
 /* Test FMU: the msd physics with two exporter bugs fmuid must work around.
  *
- * - Unreliable reset: a force offset that grows by 0.5 N with every run of one instance lives in
- *   the ModelCache, which fmi2Reset does not clear (fmi2Instantiate calloc's it). A fresh
- *   instance's run is the msd model; a run after a reset is not.
+ * - Unreliable reset: a force offset of 0.5 N per run of one instance beyond the first
+ *   1 + delay runs lives in the ModelCache, which fmi2Reset does not clear (fmi2Instantiate
+ *   calloc's it). A fresh instance's run is the msd model; the run after a reset is not
+ *   (delay = 0) or only from the (delay + 2)-th run of the instance on (delay > 0).
  * - Instance limit: the library gives out at most LIMIT instances per process; later
  *   fmi2Instantiate calls fail ("out of memory"), as some exporters do after ~1000.
  */
@@ -31,7 +32,7 @@ const char *model_apply_parameters(const double *r, ModelCache *k) {
     k->inv_m = 1.0 / r[VR_m];
     k->stiffness = r[VR_k];
     k->damping = r[VR_b];
-    k->offset = 0.5 * k->runs;
+    k->offset = k->runs > r[VR_delay] ? 0.5 * (k->runs - r[VR_delay]) : 0.0;
     k->runs += 1;
     return NULL;
 }
