@@ -23,13 +23,10 @@ from fmuid.data import Experiment, experiment_from_arrays, spec_from_json
 from fmuid.errors import FmuError
 from fmuid.fit.optimize import jacobian
 from fmuid.fit.problem import Problem
-from fmuid.model.build import build_fmu
-from fmuid.model.builtin import model_src_dir
 from fmuid.model.host import HostedSimulator
 from fmuid.model.simulator import Simulator, fmu_summary, get_simulator
 from fmuid.profile.health import check_health
 
-HERE = Path(__file__).parent
 T = np.round(np.arange(0.0, 5.0 + 1e-9, 0.1), 10)
 M, B, SIGMA = 1.1, 1.6, 0.005
 LIMIT = 40  # instances per process (model.c)
@@ -42,16 +39,10 @@ def _msd(k: float) -> np.ndarray:
     return sol.y[0]
 
 
-@pytest.fixture(scope="module")
-def leaky_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("leaky")
-    return build_fmu(model_src_dir(), HERE / "fmus_src" / "leaky_reset", out)
-
-
 @pytest.fixture
-def fresh_copy(leaky_fmu: Path, tmp_path: Path) -> Path:
+def fresh_copy(leaky_reset_fmu: Path, tmp_path: Path) -> Path:
     """A copy at a new path: its own simulators and reset verdict."""
-    return Path(shutil.copy(leaky_fmu, tmp_path / "leaky_reset.fmu"))
+    return Path(shutil.copy(leaky_reset_fmu, tmp_path / "leaky_reset.fmu"))
 
 
 def _run(sim: Simulator | HostedSimulator, k: float, **fixed: float) -> np.ndarray:
