@@ -24,8 +24,7 @@ from typing import Any
 import numpy as np
 
 from fmuid.errors import FmuError, FmuidError
-from fmuid.model.fmu import FmuModel
-from fmuid.model.simulator import INPUT_STEP, Simulator, input_handling
+from fmuid.model.simulator import INPUT_STEP, Simulator, SimulatorBase
 
 logger = logging.getLogger(__name__)
 
@@ -58,7 +57,7 @@ def recycle_runs() -> int:
     return runs
 
 
-class HostedSimulator:
+class HostedSimulator(SimulatorBase):
     """A simulator whose runs happen in a child process, with a fresh FMU instance each.
 
     It has the interface of :class:`~fmuid.model.simulator.Simulator` that the engine uses
@@ -66,12 +65,8 @@ class HostedSimulator:
 
     Parameters
     ----------
-    path
-        The ``.fmu`` file.
-    interface
-        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"``/None.
-    input_step
-        Longest sub-step [s] for co-simulation FMUs without input derivatives.
+    path, interface, input_step
+        As for :class:`~fmuid.model.simulator.SimulatorBase`.
     runs_per_process
         Runs after which the child process is replaced; default :func:`recycle_runs`.
 
@@ -91,19 +86,11 @@ class HostedSimulator:
         input_step: float = INPUT_STEP,
         runs_per_process: int | None = None,
     ) -> None:
-        self.model = FmuModel(path, interface)
-        self.path = self.model.path
-        self.interface = interface
-        self.input_step = float(input_step)
+        super().__init__(path, interface, input_step)
         self.runs_per_process = runs_per_process or recycle_runs()
         self.processes = 0
         self._runs = 0
         self._child: _Child | None = None
-
-    @property
-    def input_handling(self) -> str:
-        """How inputs reach this FMU between their samples (for results and logs)."""
-        return input_handling(self.model, self.input_step)
 
     @property
     def instances(self) -> str:

@@ -44,8 +44,8 @@ PLAN_CACHE = 32
 """Run plans kept per simulator (one per experiment of a study, typically)."""
 
 
-class Simulator:
-    """One instance of an FMU, simulated many times with different parameters and inputs.
+class SimulatorBase:
+    """What every simulator of an FMU has: the parsed FMU and how inputs reach it.
 
     Parameters
     ----------
@@ -55,6 +55,35 @@ class Simulator:
         ``"co_simulation"``, ``"model_exchange"`` or ``"auto"``/None (as :class:`FmuModel`).
     input_step
         Longest sub-step [s] for co-simulation FMUs without input derivatives.
+
+    """
+
+    def __init__(
+        self, path: str | Path, interface: str | None = None, input_step: float = INPUT_STEP
+    ) -> None:
+        self.model = FmuModel(path, interface)
+        self.path = self.model.path
+        self.interface = interface
+        self.input_step = float(input_step)
+
+    @property
+    def input_handling(self) -> str:
+        """How inputs reach this FMU between their samples (for results and logs)."""
+        model = self.model
+        if not model.is_cosimulation:
+            return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
+        if model.can_interpolate_inputs:
+            return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
+        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
+
+
+class Simulator(SimulatorBase):
+    """One instance of an FMU, simulated many times with different parameters and inputs.
+
+    Parameters
+    ----------
+    path, interface, input_step
+        As for :class:`SimulatorBase`.
     reset_reliable
         False: give every run a fresh instance without checking the reset; None: check it on
         the first run.
@@ -80,9 +109,7 @@ class Simulator:
         input_step: float = INPUT_STEP,
         reset_reliable: bool | None = None,
     ) -> None:
-        self.model = FmuModel(path, interface)
-        self.path = self.model.path
-        self.input_step = float(input_step)
+        super().__init__(path, interface, input_step)
         self._unzip_dir = tempfile.mkdtemp(prefix="fmuid-fmu-")
         self._cleanup = weakref.finalize(self, shutil.rmtree, self._unzip_dir, ignore_errors=True)
         fmpy.extract(str(self.path), unzipdir=self._unzip_dir)
@@ -93,11 +120,6 @@ class Simulator:
         self.reset_reliable = reset_reliable
         self._channels: dict[tuple[str, ...], Channels] = {}
         self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], RunPlan]] = {}
-
-    @property
-    def input_handling(self) -> str:
-        """How inputs reach this FMU between their samples (for results and logs)."""
-        return input_handling(self.model, self.input_step)
 
     @property
     def instances(self) -> str:
@@ -291,15 +313,6 @@ class Simulator:
         self._cleanup()
 
 
-def input_handling(model: FmuModel, input_step: float) -> str:
-    """Say how inputs reach ``model`` between their samples (for results and logs)."""
-    if not model.is_cosimulation:
-        return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
-    if model.can_interpolate_inputs:
-        return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
-    return f"co-simulation, linear inputs held over sub-steps of at most {input_step:g} s"
-
-
 _CACHE: dict[tuple[str, str | None, int, int], Simulator | HostedSimulator] = {}
 _CACHE_PID = os.getpid()
 _ALIASES: dict[str, Path] = {}
@@ -346,13 +359,7 @@ def get_simulator(path: str | Path, interface: str | None = None) -> Simulator |
     :class:`~fmuid.model.host.HostedSimulator`: a fresh instance per run, in a process replaced
     every ``FMUID_RECYCLE_RUNS`` runs.
 
-    Parameters
-    ----------
-    path
-        The ``.fmu`` file.
-    interface
-        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"``/None (as :class:`FmuModel`).
-
+    ``path`` and ``interface`` are as for :class:`SimulatorBase`.
     """
     from fmuid.model.host import HostedSimulator  # host imports this module
 
