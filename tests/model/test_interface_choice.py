@@ -64,8 +64,15 @@ def test_cli_interface_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     np.savetxt(data, np.column_stack([T, np.zeros(T.size)]), delimiter=",",
                header="time,x0", comments="")  # fmt: skip
     spec = tmp_path / "spec.json"
-    spec.write_text(json.dumps({"parameters": {"mu": {"start": 1.0, "lower": 0.2, "upper": 4}},
-                                "outputs": {"x0": {"sigma": 0.1}}, "global_search": False}))
+    spec.write_text(
+        json.dumps(
+            {
+                "parameters": {"mu": {"start": 1.0, "lower": 0.2, "upper": 4}},
+                "outputs": {"x0": {"sigma": 0.1}},
+                "global_search": False,
+            }
+        )
+    )
     out = tmp_path / "fit.json"
     args = ["fit", "--fmu", both, "--data", data, "--spec", spec, "--out", out]
     assert main([str(a) for a in [*args, "--interface", "model_exchange"]]) == 0

@@ -267,6 +267,14 @@ class FmuModel:
             if group is not None:
                 group[v.name] = _variable(v)
 
+    def interface_problem(self, wanted: str) -> str | None:
+        """Say why a study cannot drive the interface ``wanted`` (a spec name), else None."""
+        chosen = INTERFACES.get(wanted, wanted)
+        if chosen is None or chosen in self.interfaces:
+            return None
+        has = " and ".join(SPEC_NAMES[i] for i in self.interfaces)
+        return f'the FMU has no {wanted} interface (it has {has}); use "auto"'
+
     @property
     def is_cosimulation(self) -> bool:
         """Whether fmuid drives the FMU's co-simulation interface (else model exchange)."""
