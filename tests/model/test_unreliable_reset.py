@@ -23,6 +23,8 @@ from fmuid.data import Experiment, experiment_from_arrays, spec_from_json
 from fmuid.errors import FmuError
 from fmuid.fit.optimize import jacobian
 from fmuid.fit.problem import Problem
+from fmuid.model.build import build_fmu
+from fmuid.model.builtin import model_src_dir
 from fmuid.model.host import HostedSimulator
 from fmuid.model.simulator import Simulator, fmu_summary, get_simulator
 from fmuid.profile.health import check_health
@@ -126,3 +128,16 @@ def test_profile_with_recycled_workers(fresh_copy: Path, monkeypatch: pytest.Mon
     assert out["checks"]["health"]["reset_matches_fresh"] is False
     assert out["fmu"]["instances"].endswith("replaced every 15 runs")
     assert result.cost.simulations > LIMIT  # more runs than one process could give
+
+
+def test_a_crash_in_the_simulation_process_is_an_fmu_error(tmp_path: Path) -> None:
+    """The FMU kills its simulation process: an FmuError, and the next run gets a new one."""
+    source = Path(__file__).parents[1] / "api" / "fmus_src" / "crash_step"
+    crashing = build_fmu(model_src_dir(), source, tmp_path)
+    sim = HostedSimulator(crashing, runs_per_process=100)
+    zeros, ones = np.zeros(T.size), np.ones(T.size)
+    with pytest.raises(FmuError, match=r"process died during a run \(signal SIGSEGV\)"):
+        sim.simulate({}, T, {"f": ones}, T, ["x"])
+    assert sim.simulate({}, T, {"f": zeros}, T, ["x"])[-1, 0] == 0.0  # at rest without force
+    assert sim.processes == 2
+    sim.close()

@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import os
+import signal
 import weakref
 from collections.abc import Mapping, Sequence
 from multiprocessing.connection import Connection
@@ -120,9 +121,10 @@ class HostedSimulator(SimulatorBase):
         except (EOFError, OSError) as exc:
             code = self._child.stop()
             self._child = None
+            how = f"signal {signal.Signals(-code).name}" if code and code < 0 else f"exit {code}"
             raise FmuError(
                 f"FMU {self.model.model_name}: the simulation process died during a run "
-                f"(exit code {code})",
+                f"({how}); its FMU instance crashed or exited",
                 function="simulate",
             ) from exc
         if kind == "ok":
