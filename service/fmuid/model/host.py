@@ -163,12 +163,13 @@ class _Child:
         )
         self.process.start()
         child_conn.close()
-        self._finalizer = weakref.finalize(self, _stop, self.conn, self.process, os.getpid())
+        self._owner = os.getpid()
+        self._finalizer = weakref.finalize(self, _stop, self.conn, self.process, self._owner)
 
     def stop(self) -> int | None:
         """Ask the process to exit, kill it if it does not, and return its exit code."""
         self._finalizer.detach()
-        return _stop(self.conn, self.process, os.getpid())
+        return _stop(self.conn, self.process, self._owner)
 
 
 def _stop(conn: Connection, process: Any, owner: int) -> int | None:

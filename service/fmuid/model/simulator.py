@@ -111,7 +111,7 @@ class Simulator(SimulatorBase):
     ) -> None:
         super().__init__(path, interface, input_step)
         self._unzip_dir = tempfile.mkdtemp(prefix="fmuid-fmu-")
-        self._cleanup = weakref.finalize(self, shutil.rmtree, self._unzip_dir, ignore_errors=True)
+        self._cleanup = weakref.finalize(self, _remove_tree, self._unzip_dir, os.getpid())
         fmpy.extract(str(self.path), unzipdir=self._unzip_dir)
         self._instance = Instance(self.model, self._unzip_dir)
         self._instance.instantiate()
@@ -311,6 +311,12 @@ class Simulator(SimulatorBase):
         if self._instance.component is not None:
             self._instance.unload()
         self._cleanup()
+
+
+def _remove_tree(path: str, owner: int) -> None:
+    """Delete the extracted FMU, unless this is a forked copy of its owner (which still uses it)."""
+    if os.getpid() == owner:
+        shutil.rmtree(path, ignore_errors=True)
 
 
 _CACHE: dict[tuple[str, str | None, int, int], Simulator | HostedSimulator] = {}
