@@ -9,8 +9,10 @@ exporter bugs: ``fmi2Reset`` keeps a growing force offset, and the library gives
 from __future__ import annotations
 
 import json
+import multiprocessing
 import shutil
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -141,3 +143,22 @@ def test_a_crash_in_the_simulation_process_is_an_fmu_error(tmp_path: Path) -> No
     assert sim.simulate({}, T, {"f": zeros}, T, ["x"])[-1, 0] == 0.0  # at rest without force
     assert sim.processes == 2
     sim.close()
+
+
+def _hosted_runs(path: Path, out: Any) -> None:
+    sim = HostedSimulator(path, runs_per_process=2)
+    out.put([_run(sim, k) for k in (3.0, 4.4, 5.0)] + [sim.processes])
+    sim.close()
+
+
+def test_hosted_in_a_daemonic_process(leaky_reset_fmu: Path) -> None:
+    """Dask workers are daemonic processes, which multiprocessing lets start no children."""
+    ctx = multiprocessing.get_context("fork")
+    out = ctx.Queue()
+    worker = ctx.Process(target=_hosted_runs, args=(leaky_reset_fmu, out), daemon=True)
+    worker.start()
+    *runs, processes = out.get(timeout=120)
+    worker.join()
+    assert worker.exitcode == 0 and processes == 2
+    for k, y in zip((3.0, 4.4, 5.0), runs):
+        np.testing.assert_allclose(y, _msd(k), atol=1e-8)

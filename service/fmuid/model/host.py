@@ -16,11 +16,11 @@ import logging
 import multiprocessing
 import os
 import signal
+import time
 import weakref
 from collections.abc import Mapping, Sequence
 from multiprocessing.connection import Connection
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -150,42 +150,63 @@ class HostedSimulator(SimulatorBase):
 
 
 class _Child:
-    """One simulation process and the parent's end of its pipe."""
+    """One simulation process (``os.fork``) and the parent's end of its pipe.
+
+    A plain fork rather than ``multiprocessing.Process``: a dask worker is a daemonic process,
+    which multiprocessing does not let start children.
+    """
 
     def __init__(self, path: Path, interface: str | None, input_step: float) -> None:
-        ctx = multiprocessing.get_context("fork")
-        self.conn, child_conn = ctx.Pipe()
-        self.process: Any = ctx.Process(
-            target=_serve,
-            args=(child_conn, str(path), interface, input_step),
-            name="fmuid-simulation",
-            daemon=True,
-        )
-        self.process.start()
+        self.conn, child_conn = multiprocessing.Pipe()
+        self.pid = os.fork()
+        if self.pid == 0:  # the child: serve, never return into the caller's code
+            code = 1
+            try:
+                for other in list(_LIVE):  # other simulation processes' pipes are not ours
+                    other.conn.close()
+                self.conn.close()
+                _serve(child_conn, str(path), interface, input_step)
+                code = 0
+            except BaseException:
+                logger.exception("simulation process for %s failed", path)
+            finally:
+                os._exit(code)
         child_conn.close()
         self._owner = os.getpid()
-        self._finalizer = weakref.finalize(self, _stop, self.conn, self.process, self._owner)
+        self._finalizer = weakref.finalize(self, _stop, self.conn, self.pid, self._owner)
+        _LIVE.add(self)
 
     def stop(self) -> int | None:
         """Ask the process to exit, kill it if it does not, and return its exit code."""
         self._finalizer.detach()
-        return _stop(self.conn, self.process, self._owner)
+        _LIVE.discard(self)
+        return _stop(self.conn, self.pid, self._owner)
 
 
-def _stop(conn: Connection, process: Any, owner: int) -> int | None:
+_LIVE: weakref.WeakSet[_Child] = weakref.WeakSet()
+
+
+def _stop(conn: Connection, pid: int, owner: int) -> int | None:
+    """Stop the simulation process ``pid``; its exit code (negative: the signal), or None."""
     if os.getpid() != owner:  # a forked copy: the process belongs to the parent
         return None
     try:
         conn.send(None)
     except (OSError, ValueError):
         pass
-    process.join(STOP_TIMEOUT)
-    if process.is_alive():
-        process.kill()
-        process.join()
     conn.close()
-    code: int | None = process.exitcode
-    return code
+    deadline = time.monotonic() + STOP_TIMEOUT
+    try:
+        while True:
+            done, status = os.waitpid(pid, os.WNOHANG)
+            if done:
+                return os.waitstatus_to_exitcode(status)
+            if time.monotonic() > deadline:
+                os.kill(pid, signal.SIGKILL)
+                return os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+            time.sleep(0.002)
+    except ChildProcessError:  # reaped elsewhere
+        return None
 
 
 def _serve(conn: Connection, path: str, interface: str | None, input_step: float) -> None:
