@@ -100,9 +100,9 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
 
     """
     sims0 = problem.simulations
+    fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
     r0 = safe_residuals(problem, z_hat)
     deterministic = bool(np.array_equal(r0, safe_residuals(problem, z_hat)))
-    fresh = _fresh_matches(problem, z_hat)
     noise: dict[str, float] = {}
     jumps: dict[str, int] = {}
     steps = [PROBE_STEP]
