@@ -277,4 +277,7 @@ def make_fit_result(
         message=message,
         cost=Cost(problem.simulations - sims0, time.perf_counter() - t0),
         fmu_info=fmu_summary(problem.fmu_path, problem.spec.interface),
+        units={
+            n: v.unit for n in problem.names if (v := problem.model.parameters.get(n)) and v.unit
+        },
     )

@@ -37,8 +37,13 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
         page.table(
             ["added parameter", "estimate", "unit", "interval", "excludes the off value"],
             [
-                [n, v.get("estimate"), v.get("unit", ""), interval(v.get("ci") or (None, None)),
-                 "yes" if v.get("excludes_off") else "no"]
+                [
+                    n,
+                    v.get("estimate"),
+                    v.get("unit", ""),
+                    interval(v.get("ci") or (None, None)),
+                    "yes" if v.get("excludes_off") else "no",
+                ]
                 for n, v in added.items()
             ],  # fmt: skip
             caption="Parameters of the added physics (profile-likelihood interval)",
@@ -56,11 +61,14 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
         page.table(
             ["parameter", "before", "status before", "after", "status after", "absorbs"],
             [
-                [n, f"{fmt(a['before']['estimate'])} {interval(a['before']['ci'])}",
-                 a["before"]["status"].replace("_", " "),
-                 f"{fmt(a['after']['estimate'])} {interval(a['after']['ci'])}",
-                 a["after"]["status"].replace("_", " "),
-                 "; ".join(a.get("reasons") or []) or "no"]
+                [
+                    n,
+                    f"{fmt(a['before']['estimate'])} {interval(a['before']['ci'])}",
+                    a["before"]["status"].replace("_", " "),
+                    f"{fmt(a['after']['estimate'])} {interval(a['after']['ci'])}",
+                    a["after"]["status"].replace("_", " "),
+                    "; ".join(a.get("reasons") or []) or "no",
+                ]
                 for n, a in absorbed.items()
             ],  # fmt: skip
             caption="The original parameters without and with the added term",
@@ -68,16 +76,27 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
     if d.get("evidence"):
         page.table(
             ["test", "where", "p-value"],
-            [[TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
-             for e in d["evidence"]],  # fmt: skip
+            [
+                [TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
+                for e in d["evidence"]
+            ],  # fmt: skip
             caption="Evidence of the mismatch (tests rejected at the family-wise level)",
         )
     if d.get("candidates"):
         page.table(
             ["effect", "parameters", "chi2", "LR statistic", "p-value", "adjusted p", "round"],
-            [[c["effect"], _params(c.get("parameters", {})), c.get("chi2"), c.get("statistic"),
-              c.get("p_value"), c.get("p_adjusted"), c.get("stage", 1)]
-             for c in d["candidates"]],  # fmt: skip
+            [
+                [
+                    c["effect"],
+                    _params(c.get("parameters", {})),
+                    c.get("chi2"),
+                    c.get("statistic"),
+                    c.get("p_value"),
+                    c.get("p_adjusted"),
+                    c.get("stage", 1),
+                ]
+                for c in d["candidates"]
+            ],  # fmt: skip
             caption="Every candidate of the catalogue",
         )
     correction = d.get("generic_correction")

@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from fmuid.fit.series import residual_series
 from fmuid.plots import (
     ci_compilation_figure,
     ci_entries_from_profile,
@@ -18,6 +19,7 @@ from fmuid.plots import (
     profile_figure,
     trajectory_band_figure,
 )
+from fmuid.profile.band import trajectory_band
 from fmuid.report.advice import StudyCase, design_advice, flat_directions
 from fmuid.report.page import HtmlPage, file_slug, fmt, interval
 from fmuid.report.writer import write_report
@@ -195,13 +197,13 @@ def write_study_report(
     noisy = min((r for r in runs if r.design.name == designs[0]), key=lambda r: r.snr)
     problem = make_problem(fmu, [noisy.experiment], noisy.spec)
     page.figure(
-        trajectory_band_figure(problem, noisy.result),
+        trajectory_band_figure(trajectory_band(problem, noisy.result)),
         "trajectory_band",
         f"Trajectories inside the simultaneous CIs, {noisy.design.name}, SNR "
         f"{noisy.snr:g} (as thesis Fig 3.5).",
     )
     page.figure(
-        fit_figure(problem, noisy.result.fit),
+        fit_figure(residual_series(problem, noisy.result.fit.estimates)),
         "fit_noisiest",
         f"Fit and weighted residuals, {noisy.design.name}, SNR {noisy.snr:g}.",
     )

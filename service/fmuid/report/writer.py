@@ -11,12 +11,14 @@ from matplotlib.figure import Figure
 
 from fmuid.errors import FmuidError
 from fmuid.fit.result import FitResult
+from fmuid.fit.series import residual_series
 from fmuid.plots import (
     fit_figure,
     parameter_paths_figure,
     profile_figure,
     trajectory_band_figure,
 )
+from fmuid.profile.band import trajectory_band
 from fmuid.profile.result import ProfileResult
 from fmuid.report.diagnosis import diagnosis_sections
 from fmuid.report.page import HtmlPage, interval
@@ -145,13 +147,13 @@ def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | 
             page,
             "fit",
             "Data and fitted model; weighted residuals, Q-Q plot and histogram.",
-            lambda: fit_figure(problem, fit),
+            lambda: fit_figure(residual_series(problem, fit.estimates)),
         )
         _try_figure(
             page,
             "trajectory_band",
             "Outputs over parameter sets inside the simultaneous CI.",
-            lambda: trajectory_band_figure(problem, result),
+            lambda: trajectory_band_figure(trajectory_band(problem, result)),
         )
 
 
@@ -182,7 +184,7 @@ def _fit_sections(page: HtmlPage, fit: FitResult, problem: Problem | None) -> No
             page,
             "fit",
             "Data and fitted model; weighted residuals, Q-Q plot and histogram.",
-            lambda: fit_figure(problem, fit),
+            lambda: fit_figure(residual_series(problem, fit.estimates)),
         )
 
 
