@@ -20,12 +20,17 @@ from .foreign import model_exchange_only, reference_fmu
 T = np.round(np.arange(0.0, 6.0 + 1e-9, 0.2), 10)
 
 
-@pytest.fixture(scope="module")
-def vdp() -> Experiment:
+def _exact() -> np.ndarray:
+    """x0 of VanDerPol with mu = 1.3 from (2, 0) (scipy, independent of the FMU)."""
     sol = solve_ivp(lambda _, x: [x[1], 1.3 * (1 - x[0] ** 2) * x[1] - x[0]], (0, T[-1]),
                     [2.0, 0.0], t_eval=T, rtol=1e-12, atol=1e-12, method="DOP853")  # fmt: skip
+    return sol.y[0]
+
+
+@pytest.fixture(scope="module")
+def vdp() -> Experiment:
     noise = np.random.default_rng(2).normal(0.0, 0.02, T.size)
-    return experiment_from_arrays("vdp.csv", T, {"x0": sol.y[0] + noise})
+    return experiment_from_arrays("vdp.csv", T, {"x0": _exact() + noise})
 
 
 def _spec(interface: str | None) -> fmuid.data.Spec:
@@ -84,3 +89,26 @@ def test_cli_interface_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     assert main([str(a) for a in [*sim, "--interface", "model_exchange"]]) == 0
     y = np.loadtxt(tmp_path / "y.csv", delimiter=",", skiprows=1)
     assert y[0, 1] == 2.0  # VanDerPol starts at x0 = 2
+
+
+def test_simulate_takes_the_interface_from_a_fixed_only_spec(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    both = reference_fmu("fmi2", "VanDerPol")
+    data = tmp_path / "t.csv"
+    np.savetxt(data, T, header="time", comments="")
+    spec = tmp_path / "fixed.json"
+    out = tmp_path / "y.csv"
+    rows = {}
+    for interface in ("co_simulation", "model_exchange"):
+        spec.write_text(json.dumps({"fixed": {"mu": 1.3}, "interface": interface}))
+        args = ["simulate", "--fmu", both, "--data", data, "--spec", spec, "--out", out]
+        assert main([str(a) for a in args]) == 0
+        rows[interface] = np.loadtxt(out, delimiter=",", skiprows=1)[:, 1]
+    exact = _exact()
+    me_error = np.max(np.abs(rows["model_exchange"] - exact))
+    assert me_error < 1e-5 < np.max(np.abs(rows["co_simulation"] - exact))  # CS: Euler steps
+    spec.write_text(json.dumps({"fixed": {}, "interface": "cvode"}))
+    assert main([str(a) for a in ["simulate", "--fmu", both, "--data", data, "--spec", spec,
+                                  "--out", out]]) == 2  # fmt: skip
+    assert "interface: 'cvode' is not one of" in capsys.readouterr().err
