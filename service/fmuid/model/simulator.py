@@ -337,10 +337,10 @@ def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
 def mark_reset_unreliable(path: str | Path, interface: str | None = None) -> None:
     """Record that the FMU's reset is unreliable: :func:`get_simulator` hosts it from now on.
 
-    The record is kept by this process and inherited by the worker processes it forks later
-    (the profile's branch workers).
+    The record holds in this process and in the worker processes it forks later.
     """
-    _UNRELIABLE.add((str(_ALIASES.get(str(path), Path(path)).resolve()), _interface(interface)))
+    resolved = _ALIASES.get(str(path), Path(path)).resolve()
+    _UNRELIABLE.add((str(resolved), INTERFACES.get(interface, interface)))
 
 
 def fmu_summary(path: str | Path, interface: str | None = None) -> dict[str, str]:
@@ -379,7 +379,7 @@ def get_simulator(path: str | Path, interface: str | None = None) -> Simulator |
     except OSError as exc:
         raise FmuError(f"FMU {path} does not exist") from exc
     thread = threading.get_ident()
-    wanted = _interface(interface)
+    wanted = INTERFACES.get(interface, interface)  # FMI's name; None: auto
     key = (str(resolved), wanted, mtime, thread)
     simulator = _CACHE.get(key)
     if isinstance(simulator, Simulator) and (
@@ -395,8 +395,3 @@ def get_simulator(path: str | Path, interface: str | None = None) -> Simulator |
         simulator = (HostedSimulator if hosted else Simulator)(resolved, wanted)
         _CACHE[key] = simulator
     return simulator
-
-
-def _interface(interface: str | None) -> str | None:
-    """Return the FMI name of an interface option (None for auto); unknown names pass through."""
-    return INTERFACES.get(interface, interface)
