@@ -46,9 +46,12 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
     names = [e.name for e in experiments]
     if len(set(names)) != len(names):
         raise DataError(f"two data files share a name ({', '.join(names)}); rename one")
+    spec = load_spec(Path(args.spec))
+    if args.interface:
+        spec = spec.model_copy(update={"interface": args.interface})
     from fmuid.formats.cli import apply_start
 
-    return fmu, experiments, apply_start(load_spec(Path(args.spec)), args.start)
+    return fmu, experiments, apply_start(spec, args.start)
 
 
 def _fmu_path(text: str) -> Path:
@@ -106,6 +109,17 @@ def _simulation_values(path: Path) -> dict[str, float | str]:
     return values
 
 
+def _spec_interface(path: Path) -> str:
+    """Return the ``interface`` of the spec at ``path`` (default ``auto``), checked."""
+    interface = json.loads(path.read_text()).get("interface", "auto")
+    if interface not in ("auto", "co_simulation", "model_exchange"):
+        raise SpecError(
+            f"{path}: interface: {interface!r} is not one of 'auto', 'co_simulation' or "
+            "'model_exchange'"
+        )
+    return str(interface)
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -115,9 +129,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from fmuid.model.simulator import Simulator
 
     fmu = _fmu_path(args.fmu)
-    model = FmuModel(fmu)
     experiment = load_experiment(args.data)
     params = _simulation_values(Path(args.spec)) if args.spec else {}
+    interface = args.interface or (_spec_interface(Path(args.spec)) if args.spec else "auto")
+    model = FmuModel(fmu, interface)
     unknown = sorted(set(params) - set(model.parameters))
     if unknown:
         raise SpecError(f"{args.spec}: the FMU has no parameter(s) {', '.join(unknown)}")
@@ -142,7 +157,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if not outputs:
         types = ", ".join(f"{n} ({v.type_label})" for n, v in model.outputs.items()) or "none"
         raise FmuError(f"{fmu}: no output fmuid can read (its outputs: {types})")
-    y = Simulator(fmu).simulate(params, input_time, input_values, experiment.time, outputs)
+    simulator = Simulator(fmu, interface)
+    y = simulator.simulate(params, input_time, input_values, experiment.time, outputs)
+    log.info("%s; %s", model.kind_label, simulator.input_handling)
     columns, header = [experiment.time], ["time"]
     if args.with_inputs:
         for name in inputs:
@@ -230,6 +247,15 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _interface_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--interface",
+        choices=("auto", "co_simulation", "model_exchange"),
+        help="FMI interface of an FMU that has both (default: the spec's, else auto = "
+        "co-simulation)",
+    )
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fmuid", description=_DESCRIPTION)
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
@@ -251,6 +277,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--data", required=True, help="CSV with time and input columns")
     p.add_argument("--spec", help="spec JSON: parameter values (start, fixed; fixed alone will do)")
     p.add_argument("--out", required=True, help="output CSV")
+    _interface_option(p)
     p.add_argument(
         "--with-inputs", action="store_true", help="write the input columns beside the outputs"
     )
@@ -268,6 +295,7 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--out", required=True, help="result JSON")
         p.add_argument("--report", help="write index.html and plots into this folder")
         p.add_argument("--start", help="SSP parameter-value file (.ssv): start values")
+        _interface_option(p)
         if name == "profile":
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")
         p.set_defaults(func=func)

@@ -91,6 +91,7 @@ def test_petab_round_trip_same_problem_same_result(study, msd_fmu, tmp_path):
     assert back.spec.fixed == spec.fixed
     assert back.spec.outputs == spec.outputs
     assert (back.spec.confidence, back.spec.global_search, back.spec.seed) == (0.9, False, 4)
+    assert back.spec.interface == spec.interface
     for name, p in spec.parameters.items():
         q = back.spec.parameters[name]
         assert (q.start, q.lower, q.upper, q.resolved_scale) == (

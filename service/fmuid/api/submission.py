@@ -140,6 +140,9 @@ def submit(
             _save(upload, path)
         try:
             fmu_path, fmu_model = _load_fmu(workdir, fmu, model, max_fmu_unpacked_bytes)
+            wrong_interface = fmu_model.interface_problem(parsed_spec.interface)
+            if wrong_interface:
+                raise SubmissionError(422, f"spec: interface: {wrong_interface}")
             experiments = [load_experiment(path) for path in paths]
             check_against_model(
                 parsed_spec,

@@ -50,7 +50,7 @@ class Problem:
         model: FmuModel | None = None,
     ):
         self.fmu_path = Path(fmu_path)
-        self.model = model if model is not None else FmuModel(self.fmu_path)
+        self.model = model if model is not None else FmuModel(self.fmu_path, spec.interface)
         self.experiments = list(experiments)
         self.spec = spec
         params = dict(parameters if parameters is not None else spec.parameters)
@@ -69,7 +69,9 @@ class Problem:
             }
         )
         self.inputs = inputs
-        self.predictor: Predictor = predictor or FmuPredictor(self.fmu_path, spec.fixed, inputs)
+        self.predictor: Predictor = predictor or FmuPredictor(
+            self.fmu_path, spec.fixed, inputs, spec.interface
+        )
         self.masks = [
             [
                 exp.output_mask(o) if o in exp.columns else np.zeros(exp.n_rows, bool)

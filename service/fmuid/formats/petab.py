@@ -175,6 +175,7 @@ def write_petab(
                 "confidence": spec.confidence,
                 "global_search": spec.global_search,
                 "seed": spec.seed,
+                "interface": spec.interface,
                 "fixed_text": text,
             }
         },

@@ -59,7 +59,7 @@ def read_petab(problem_file: str | os.PathLike[str]) -> PetabProblem:
         "fixed": fixed,
         "inputs": list(ext.get("inputs") or []),
         "outputs": outputs,
-        **{k: ext[k] for k in ("confidence", "global_search", "seed") if k in ext},
+        **{k: ext[k] for k in ("confidence", "global_search", "seed", "interface") if k in ext},
     }
     spec = spec_from_json(json.dumps(spec_data), str(path))
     experiments = _experiments(tables, outputs)

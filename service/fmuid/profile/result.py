@@ -178,7 +178,11 @@ class ProfileResult:
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the contract."""
         return {
-            "fmu": {"sha256": self.fit.fmu_sha256, "model_name": self.fit.model_name},
+            "fmu": {
+                "sha256": self.fit.fmu_sha256,
+                "model_name": self.fit.model_name,
+                **self.fit.fmu_info,
+            },
             "n_data": self.fit.n_data,
             "chi2": float(self.fit.chi2),
             "confidence": self.confidence,
