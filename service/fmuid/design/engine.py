@@ -71,7 +71,12 @@ class Screen:
         """Predicted intervals at the nominal (the first point)."""
         problem = trial_problem(self.model, self.spec, self.space, trial)
         return predicted_intervals(
-            sens.fisher(outputs), self.basis, problem, self.points[0], self.threshold, self.structural
+            sens.fisher(outputs),
+            self.basis,
+            problem,
+            self.points[0],
+            self.threshold,
+            self.structural,
         )
 
 
@@ -115,8 +120,12 @@ def design(
     """
     t0 = time.perf_counter()
     model = FmuModel(resolve_fmu(fmu))
-    check_space(space, list(model.inputs), list(model.outputs), model.parameters, list(spec.parameters))
-    problems = model.usage_problems(list(spec.parameters), spec.fixed, [space.input], list(space.outputs))
+    check_space(
+        space, list(model.inputs), list(model.outputs), model.parameters, list(spec.parameters)
+    )
+    problems = model.usage_problems(
+        list(spec.parameters), spec.fixed, [space.input], list(space.outputs)
+    )
     if problems:
         raise SpecError("\n".join(problems))
     rng = np.random.default_rng(space.seed)
@@ -154,7 +163,15 @@ def design(
     for i, d in enumerate(ranked[:n_verify]):
         if progress:
             progress(Progress("design", i, n_verify, f"profiles of design {i + 1}"))
-        v = verify(model, spec, space, d.trial, seed=space.seed + 1000 * (i + 1), workers=workers, executor=executor)
+        v = verify(
+            model,
+            spec,
+            space,
+            d.trial,
+            seed=space.seed + 1000 * (i + 1),
+            workers=workers,
+            executor=executor,
+        )
         sims0 += v.simulations
         verified.append(RankedDesign(d.trial, d.score, d.predicted, v))
     verified.sort(key=lambda d: _verified_key(d, space))

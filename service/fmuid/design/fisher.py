@@ -28,8 +28,10 @@ INVOLVED = 0.05
 """A parameter takes part in a null direction when its component exceeds this (unit vector)."""
 
 
-def trial_spec(spec: Spec, space: Space, trial: Trial, outputs: Sequence[str] | None = None) -> Spec:
-    """The study spec of one trial: its sensors with the space's noise, its test parameters."""
+def trial_spec(
+    spec: Spec, space: Space, trial: Trial, outputs: Sequence[str] | None = None
+) -> Spec:
+    """Return the study spec of a trial: its sensors with the space's noise, its test values."""
     names = list(outputs if outputs is not None else trial.outputs)
     return spec.model_copy(
         update={
@@ -48,7 +50,7 @@ def trial_problem(
     values: Mapping[str, np.ndarray] | None = None,
     predictor: Predictor | None = None,
 ) -> Problem:
-    """The estimation problem of a trial (data: ``values`` at the sensor times, or zeros)."""
+    """Return the estimation problem of a trial (data: ``values`` at the sensor times, or zeros)."""
     exp = trial_experiment(trial, space.input, values)
     return Problem(
         model.path, [exp], trial_spec(spec, space, trial), model=model, predictor=predictor
@@ -98,7 +100,9 @@ def null_space(sens: Sequence[Sensitivity], problem: Problem, values: Mapping[st
     Each trial's rows are scaled to unit norm so that none dominates.
     """
     stacked = np.vstack([s.jacobian / max(np.linalg.norm(s.jacobian), 1e-300) for s in sens])
-    return structural_check(stacked, problem.names, problem.scales, [values[n] for n in problem.names])
+    return structural_check(
+        stacked, problem.names, problem.scales, [values[n] for n in problem.names]
+    )
 
 
 def identifiable_basis(combinations: Sequence[Mapping], names: Sequence[str]) -> np.ndarray:
@@ -181,13 +185,18 @@ def _with(z: np.ndarray, i: int, value: float) -> np.ndarray:
 def robust_points(
     spec: Spec, space: Space, problem: Problem, rng: np.random.Generator
 ) -> list[dict[str, float]]:
-    """The nominal (spec start) and ``space.robust.points`` Latin-hypercube points of the box."""
+    """Return the nominal (spec start) and ``space.robust.points`` Latin-hypercube points."""
     nominal = {n: float(p.start) for n, p in spec.parameters.items()}
     k = space.robust.points
     if k == 0:
         return [nominal]
-    box = [space.robust.box.get(n, (problem.lower[i], problem.upper[i])) for i, n in enumerate(problem.names)]
+    box = [
+        space.robust.box.get(n, (problem.lower[i], problem.upper[i]))
+        for i, n in enumerate(problem.names)
+    ]
     lo = problem.to_z_array(np.array([b[0] for b in box]))
     hi = problem.to_z_array(np.array([b[1] for b in box]))
-    strata = (rng.permuted(np.tile(np.arange(k), (len(box), 1)), axis=1).T + rng.random((k, len(box)))) / k
+    strata = (
+        rng.permuted(np.tile(np.arange(k), (len(box), 1)), axis=1).T + rng.random((k, len(box)))
+    ) / k
     return [nominal, *(problem.from_z(lo + (hi - lo) * row) for row in strata)]

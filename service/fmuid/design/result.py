@@ -38,7 +38,7 @@ class RankedDesign:
     verified: Verification | None = None
 
     def to_dict(self, input_name: str) -> dict[str, Any]:
-        """The contract's design entry."""
+        """Return the contract's design entry."""
         return {
             "experiment": self.trial.to_dict(input_name),
             "predicted": {
@@ -99,7 +99,7 @@ class DesignResult:
         return self.designs[0]
 
     def to_dict(self) -> dict[str, Any]:
-        """The contract's JSON form."""
+        """Return the contract's JSON form."""
         return {
             "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name},
             "criterion": self.criterion,
@@ -110,14 +110,22 @@ class DesignResult:
             ],
             "tradeoffs": self.tradeoffs,
             "screened": self.screened,
-            "cost": {**self.cost.to_dict(), **{k: round(v, 3) for k, v in self.stage_seconds.items()}},
+            "cost": {
+                **self.cost.to_dict(),
+                **{k: round(v, 3) for k, v in self.stage_seconds.items()},
+            },
         }
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per design: experiment, score, predicted width and verified count per parameter."""
+        """Return one row per design: settings, score, predicted widths, verified counts."""
         rows = []
         for rank, d in enumerate(self.designs, 1):
-            row: dict[str, Any] = {"rank": rank, "design": d.trial.label, "sensors": ", ".join(d.trial.outputs), "score": d.score}
+            row: dict[str, Any] = {
+                "rank": rank,
+                "design": d.trial.label,
+                "sensors": ", ".join(d.trial.outputs),
+                "score": d.score,
+            }
             for n, p in d.predicted.items():
                 row[f"{n} width"] = p.get("width_z", math.nan)
                 if d.verified is not None:

@@ -62,7 +62,7 @@ class Trial:
         return Trial(**values)  # type: ignore[arg-type]
 
     def to_dict(self, input_name: str) -> dict[str, object]:
-        """The contract's ``experiment`` block."""
+        """Return the contract's ``experiment`` block."""
         return {
             "input": self.family,
             "input_variable": input_name,
@@ -87,7 +87,7 @@ def trial_from_dict(d: Mapping[str, object]) -> Trial:
         settings=dict(d["settings"]),  # type: ignore[call-overload]
         duration=float(d["duration"]),  # type: ignore[arg-type]
         rate_hz=float(d["rate_hz"]),  # type: ignore[arg-type]
-        outputs=tuple(d["outputs"]),  # type: ignore[call-overload]
+        outputs=tuple(d["outputs"]),  # type: ignore[arg-type]
         fixed=dict(d.get("fixed") or {}),  # type: ignore[call-overload]
     )
 
@@ -174,7 +174,10 @@ def sample_trials(space: Space, rng: np.random.Generator) -> list[Trial]:
         names = list(FAMILY_SETTINGS[family])
         dims = [*(ranges[n] for n in names), space.duration, *space.fixed.values()]
         n = space.candidates
-        strata = (rng.permuted(np.tile(np.arange(n), (len(dims), 1)), axis=1).T + rng.random((n, len(dims)))) / n
+        strata = (
+            rng.permuted(np.tile(np.arange(n), (len(dims), 1)), axis=1).T
+            + rng.random((n, len(dims)))
+        ) / n
         for row in strata:
             vals = [lo + (hi - lo) * x for (lo, hi), x in zip(dims, row, strict=True)]
             settings = dict(zip(names, vals[: len(names)], strict=True))
@@ -182,11 +185,15 @@ def sample_trials(space: Space, rng: np.random.Generator) -> list[Trial]:
                 settings["tones"] = float(round(settings["tones"]))
             duration = float(vals[len(names)])
             if family == "double_lane_change":
-                duration = max(duration, min(DLC_START + 3 * settings["duration"], space.duration[1]))
+                duration = max(
+                    duration, min(DLC_START + 3 * settings["duration"], space.duration[1])
+                )
                 settings["duration"] = min(settings["duration"], (duration - DLC_START) / 3)
             fixed = dict(zip(space.fixed, vals[len(names) + 1 :], strict=True))
             for rate in space.rates_hz:
-                out.append(Trial(family, settings, duration, float(rate), tuple(space.outputs), fixed))
+                out.append(
+                    Trial(family, settings, duration, float(rate), tuple(space.outputs), fixed)
+                )
     return out
 
 

@@ -161,9 +161,7 @@ class Space(BaseModel):
         out = {}
         for family, settings in value.items():
             if family not in FAMILY_SETTINGS:
-                raise ValueError(
-                    f"unknown family {family!r}; known: {', '.join(FAMILY_SETTINGS)}"
-                )
+                raise ValueError(f"unknown family {family!r}; known: {', '.join(FAMILY_SETTINGS)}")
             if not isinstance(settings, dict):
                 raise ValueError(f"{family}: settings must be an object")
             needed = FAMILY_SETTINGS[family]
@@ -213,7 +211,7 @@ class Space(BaseModel):
         if self.max_sensors is None:
             return [base] if base else [tuple(self.outputs)]
         extra = [o for o in self.outputs if o not in base]
-        sets = []
+        sets: list[tuple[str, ...]] = []
         for k in range(0, self.max_sensors - len(base) + 1):
             sets.extend(base + combo for combo in combinations(extra, k))
         return [s for s in sets if s]

@@ -48,7 +48,11 @@ class Verification:
     def geometric_mean_width(self) -> float:
         """Geometric mean over the parameters of the median widths (``inf`` if one is open)."""
         w = np.array([self.median_width(n) for n in self.widths])
-        return float(np.exp(np.mean(np.log(w)))) if np.all(np.isfinite(w)) and np.all(w > 0) else float("inf")
+        return (
+            float(np.exp(np.mean(np.log(w))))
+            if np.all(np.isfinite(w)) and np.all(w > 0)
+            else float("inf")
+        )
 
     def to_dict(self) -> dict[str, object]:
         """JSON form (open widths as null)."""
@@ -71,7 +75,7 @@ def noisy_problem(
     truth: Mapping[str, float],
     rng: np.random.Generator,
 ) -> Problem:
-    """Simulate the trial at ``truth``, add Gaussian noise at the space's sigma, return the problem."""
+    """Simulate the trial at ``truth`` with Gaussian noise at the space's sigma; its problem."""
     template = trial_problem(model, spec, space, trial)
     clean = template.predict(truth)[0]
     mask = template.masks[0][0]

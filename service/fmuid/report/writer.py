@@ -71,6 +71,12 @@ def write_report(
         from fmuid.fit.problem import Problem
 
         problem = Problem(fmu, experiments, spec)
+    from fmuid.design import DesignResult
+
+    if isinstance(result, DesignResult):
+        from fmuid.design.report import write_design_report
+
+        return write_design_report(result, Path(directory))
     if isinstance(result, ProfileResult):
         page = HtmlPage(Path(directory), f"Profile likelihood: {result.fit.model_name}")
         _profile_sections(page, result, problem)
