@@ -92,7 +92,7 @@ def make_space(sigma: float, args: argparse.Namespace, extra_sensors: bool = Fal
 
 def geo(widths: dict[str, float]) -> float:
     w = np.array(list(widths.values()))
-    return float(np.exp(np.mean(np.log(w)))) if np.all(np.isfinite(w)) else math.inf
+    return float(np.exp(np.mean(np.log(w))))
 
 
 def study(fmu, snr: float, args: argparse.Namespace, executor) -> None:
@@ -124,7 +124,7 @@ def study(fmu, snr: float, args: argparse.Namespace, executor) -> None:
         count = best.verified.identifiable[n] if best.verified else "-"
         r = rec.get(n, math.nan)
         print(
-            f"| {n} | {rmp[n]:.4f} | {ramp.identifiable[n]}/{ramp.draws} | {pred:.4f} "
+            f"| {n} | {rmp[n]:.4f}{'+' * bool(ramp.open_ended[n])} | {ramp.identifiable[n]}/{ramp.draws} | {pred:.4f} "
             f"| {r:.4f} | {count}/{args.draws} | {rmp[n] / r:.2f} |"
         )
     print(f"| geometric mean | {geo(rmp):.4f} | | | {geo(rec):.4f} | | {geo(rmp) / geo(rec):.2f} |")

@@ -27,9 +27,11 @@ class Verification:
         Number of noise draws profiled.
     identifiable
         Parameter -> draws in which its profile labelled it identifiable.
+    open_ended
+        Parameter -> draws in which a simultaneous CI end was open (not crossed in the bounds).
     widths
         Parameter -> simultaneous CI width per draw [decades for log-scaled parameters, else
-        the parameter's unit]; ``inf`` when an end was open.
+        the parameter's unit]; an open end counts at the parameter's bound (a lower limit).
     simulations, seconds
         Cost of the fits and profiles.
 
@@ -37,6 +39,7 @@ class Verification:
 
     draws: int
     identifiable: dict[str, int]
+    open_ended: dict[str, int]
     widths: dict[str, list[float]]
     simulations: int
     seconds: float
@@ -46,24 +49,18 @@ class Verification:
         return float(np.median(self.widths[name]))
 
     def geometric_mean_width(self) -> float:
-        """Geometric mean over the parameters of the median widths (``inf`` if one is open)."""
+        """Geometric mean over the parameters of the median widths."""
         w = np.array([self.median_width(n) for n in self.widths])
-        return (
-            float(np.exp(np.mean(np.log(w))))
-            if np.all(np.isfinite(w)) and np.all(w > 0)
-            else float("inf")
-        )
+        return float(np.exp(np.mean(np.log(np.maximum(w, 1e-300)))))
 
     def to_dict(self) -> dict[str, object]:
-        """JSON form (open widths as null)."""
+        """Return the JSON form."""
         return {
             "draws": self.draws,
             "identifiable": dict(self.identifiable),
-            "median_width": {
-                n: (self.median_width(n) if np.isfinite(self.median_width(n)) else None)
-                for n in self.widths
-            },
-            "width_unit": "decades (log-scaled parameters)",
+            "open_ended": dict(self.open_ended),
+            "median_width": {n: self.median_width(n) for n in self.widths},
+            "width_unit": "decades (log-scaled parameters); open ends at the bound",
         }
 
 
@@ -104,6 +101,7 @@ def verify(
     truth = {n: float(p.start) for n, p in spec.parameters.items()}
     identifiable = dict.fromkeys(spec.parameters, 0)
     widths: dict[str, list[float]] = {n: [] for n in spec.parameters}
+    opened = dict.fromkeys(spec.parameters, 0)
     sims, seconds = 0, 0.0
     for draw in range(space.draws):
         rng = np.random.default_rng((seed, draw))
@@ -115,11 +113,11 @@ def verify(
         for i, name in enumerate(problem.names):
             p = prof.parameters[name]
             identifiable[name] += p.status == "identifiable"
-            lo, hi = p.ci_simultaneous
-            if lo is None or hi is None:
-                widths[name].append(float("inf"))
-            elif problem.scales[i] == "log":
+            lo = p.ci_simultaneous[0] if p.ci_simultaneous[0] is not None else problem.lower[i]
+            hi = p.ci_simultaneous[1] if p.ci_simultaneous[1] is not None else problem.upper[i]
+            opened[name] += None in p.ci_simultaneous
+            if problem.scales[i] == "log":
                 widths[name].append(float(np.log10(hi) - np.log10(lo)))
             else:
                 widths[name].append(float(hi - lo))
-    return Verification(space.draws, identifiable, widths, sims, seconds)
+    return Verification(space.draws, identifiable, opened, widths, sims, seconds)
