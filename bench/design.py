@@ -124,7 +124,8 @@ def study(fmu, snr: float, args: argparse.Namespace, executor) -> None:
         count = best.verified.identifiable[n] if best.verified else "-"
         r = rec.get(n, math.nan)
         print(
-            f"| {n} | {rmp[n]:.4f}{'+' * bool(ramp.open_ended[n])} | {ramp.identifiable[n]}/{ramp.draws} | {pred:.4f} "
+            f"| {n} | {rmp[n]:.4f}{'+' * bool(ramp.open_ended[n])} "
+            f"| {ramp.identifiable[n]}/{ramp.draws} | {pred:.4f} "
             f"| {r:.4f} | {count}/{args.draws} | {rmp[n] / r:.2f} |"
         )
     print(f"| geometric mean | {geo(rmp):.4f} | | | {geo(rec):.4f} | | {geo(rmp) / geo(rec):.2f} |")
