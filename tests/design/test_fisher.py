@@ -4,9 +4,9 @@ import json
 
 import numpy as np
 import pytest
+from design_cases import space_of
 from scipy.integrate import solve_ivp
 
-from conftest import space_of
 from fmuid.data import spec_from_json
 from fmuid.design import design
 from fmuid.design.fisher import sensitivity, trial_problem

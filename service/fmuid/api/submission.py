@@ -175,7 +175,7 @@ def _submit_design(
     max_fmu_unpacked_bytes: int,
 ) -> Job:
     """Check and queue a design job: the space is stored as its one dataset, ``space.json``."""
-    from fmuid.design.space import check_space, space_from_json
+    from fmuid.design.space import check_design, space_from_json
 
     if data:
         raise SubmissionError(422, "data: kind 'design' takes a 'space' file, not data")
@@ -188,13 +188,7 @@ def _submit_design(
         try:
             fmu_path, fmu_model = _load_fmu(workdir, fmu, model, max_fmu_unpacked_bytes)
             parsed = space_from_json(space_path.read_text(errors="replace"), "space")
-            check_space(
-                parsed, list(fmu_model.inputs), list(fmu_model.outputs),
-                fmu_model.parameters, list(parsed_spec.parameters),
-            )  # fmt: skip
-            check_against_model(
-                parsed_spec, fmu_model.parameters, fmu_model.inputs, fmu_model.outputs, []
-            )
+            check_design(parsed, parsed_spec, fmu_model)
         except FmuidError as exc:
             raise SubmissionError(422, str(exc)) from exc
         fmu_sha = store.add_file(fmu_path)

@@ -26,9 +26,8 @@ from fmuid.design.fisher import (
 )
 from fmuid.design.result import DesignResult, RankedDesign
 from fmuid.design.signals import Trial, sample_trials
-from fmuid.design.space import Space, check_space
+from fmuid.design.space import Space, check_design
 from fmuid.design.verify import verify
-from fmuid.errors import SpecError
 from fmuid.fit.result import Cost
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel
@@ -120,14 +119,7 @@ def design(
     """
     t0 = time.perf_counter()
     model = FmuModel(resolve_fmu(fmu))
-    check_space(
-        space, list(model.inputs), list(model.outputs), model.parameters, list(spec.parameters)
-    )
-    problems = model.usage_problems(
-        list(spec.parameters), spec.fixed, [space.input], list(space.outputs)
-    )
-    if problems:
-        raise SpecError("\n".join(problems))
+    check_design(space, spec, model)
     rng = np.random.default_rng(space.seed)
     trials = sample_trials(space, rng)
     threshold = thresholds(spec.confidence, len(spec.parameters))["simultaneous"]

@@ -289,3 +289,29 @@ def check_space(
     ]
     if problems:
         raise SpecError("\n".join(f"space: {p}" for p in problems))
+
+
+def check_design(space: Space, spec: Any, model: Any) -> None:
+    """Check a design study (space and spec) against the FMU (a ``FmuModel``).
+
+    Raises
+    ------
+    SpecError
+        Naming the field: unknown variables, free or fixed parameters the FMU lacks, or
+        variables whose type does not fit their role.
+
+    """
+    check_space(
+        space, list(model.inputs), list(model.outputs), model.parameters, list(spec.parameters)
+    )
+    problems = [
+        f"spec: {field}: {name!r} is not an FMU parameter"
+        for field, names in (("parameters", spec.parameters), ("fixed", spec.fixed))
+        for name in names
+        if name not in model.parameters
+    ]
+    problems += model.usage_problems(
+        list(spec.parameters), spec.fixed, [space.input], list(space.outputs)
+    )
+    if problems:
+        raise SpecError("\n".join(problems))

@@ -67,16 +67,16 @@ def write_report(
         The ``index.html`` written.
 
     """
-    if problem is None and fmu is not None and experiments is not None and spec is not None:
-        from fmuid.fit.problem import Problem
-
-        problem = Problem(fmu, experiments, spec)
     from fmuid.design import DesignResult
 
     if isinstance(result, DesignResult):
         from fmuid.design.report import write_design_report
 
         return write_design_report(result, Path(directory))
+    if problem is None and fmu is not None and experiments is not None and spec is not None:
+        from fmuid.fit.problem import Problem
+
+        problem = Problem(fmu, experiments, spec)
     if isinstance(result, ProfileResult):
         page = HtmlPage(Path(directory), f"Profile likelihood: {result.fit.model_name}")
         _profile_sections(page, result, problem)
