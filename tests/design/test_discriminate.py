@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from fmuid.data import ParameterSpec, spec_from_json
+from fmuid.data import ParameterSpec, experiment_from_arrays, spec_from_json
 from fmuid.design import space_from_json
-from fmuid.design.discriminate import Hypothesis, discriminating_experiment
+from fmuid.design.discriminate import Hypothesis, default_space, discriminating_experiment
 from fmuid.design.report import discrimination_figure
 from fmuid.fit.optimize import fit_problem
+from fmuid.fit.problem import Problem
 from fmuid.model.builtin import builtin_fmu
 
 TAU = 0.3
@@ -89,3 +90,15 @@ def test_predicted_separation_is_confirmed_on_simulated_data(proposal):
             )
             hits += chi2.sf(wrong.chi2 - right.chi2, 1) < 1e-3
         assert hits >= 18, (truth.name, hits)
+
+
+def test_default_space_follows_the_study_data():
+    t = np.round(np.arange(0, 8.0001, 0.2), 10)
+    exp = experiment_from_arrays("d.csv", t, {"f": np.where(t > 1, 2.0, 0.0), "x": 0.1 * t})
+    spec = spec_from_json(json.dumps(SPEC))
+    space = default_space(Problem(builtin_fmu("msd"), [exp], spec))
+    assert space.input == "f"
+    assert space.families["step"]["amplitude"] == (-2.0, 2.0)
+    assert space.duration == (8.0, 8.0) and space.longest_test == 8.0
+    assert space.rates_hz == [pytest.approx(5.0)]
+    assert space.outputs["x"].sigma == 0.005
