@@ -9,7 +9,8 @@ simultaneous CI widths (decades) and their geometric mean over the six parameter
 verification are timed separately. ``--sensors`` also asks which sensor added to the yaw rates
 helps most, ``--masses`` what freeing masses and inertias costs (Fisher screen only).
 
-    PYTHONPATH=service python bench/design.py --snr 25 --draws 5 [--dask]
+    PYTHONPATH=service python bench/design.py --snr 25 --draws 5 [--workers 2] [--dask]
+    PYTHONPATH=service python bench/design.py --no-study --sensors --masses
 """
 
 from __future__ import annotations
@@ -101,6 +102,7 @@ def study(fmu, snr: float, args: argparse.Namespace, executor) -> None:
     t0 = time.perf_counter()
     result = design(fmu, spec, space, workers=args.workers, executor=executor)
     total = time.perf_counter() - t0
+    print(f"screen done; best screened: {result.designs[0].trial.label}", flush=True)
     best = result.best
     t1 = time.perf_counter()
     ramp = verify(FmuModel(fmu), spec, space, RAMP, seed=7, workers=args.workers, executor=executor)
@@ -169,6 +171,7 @@ def main() -> None:
     parser.add_argument(
         "--dask", action="store_true", help="verify on a local dask cluster (2 processes)"
     )
+    parser.add_argument("--no-study", action="store_true", help="skip the verified SNR study")
     parser.add_argument("--sensors", action="store_true")
     parser.add_argument("--masses", action="store_true")
     args = parser.parse_args()
@@ -179,7 +182,7 @@ def main() -> None:
 
         executor = Client(LocalCluster(n_workers=2, threads_per_worker=1, processes=True))
     try:
-        for snr in args.snr:
+        for snr in [] if args.no_study else args.snr:
             study(fmu, snr, args, executor)
         if args.sensors:
             sensors(fmu, args.snr[0], args)
