@@ -1,6 +1,7 @@
 """fmuid: black-box identifiability of FMU parameters (fits, profile likelihoods, diagnosis).
 
-The stages are plain functions: ``fmuid.fit``, ``fmuid.profile`` and ``fmuid.diagnose``;
+The stages are plain functions: ``fmuid.fit``, ``fmuid.profile``, ``fmuid.diagnose`` and
+``fmuid.design``;
 ``fmuid.info`` describes a model, ``fmuid.load_result`` reads a saved result back. The
 subpackages ``fit``, ``profile`` and ``diagnose`` share the stages' names and hold their
 machinery; import from them with ``from fmuid.fit.problem import Problem`` style imports.
@@ -21,13 +22,15 @@ _LAZY = {
     "fit": "fmuid.stages",
     "profile": "fmuid.stages",
     "diagnose": "fmuid.diagnose",
+    "design": "fmuid.design",
     "info": "fmuid.model.info",
     "load_result": "fmuid.results",
 }
 
-__all__ = ["__version__", "diagnose", "fit", "info", "load_result", "profile"]
+__all__ = ["__version__", "design", "diagnose", "fit", "info", "load_result", "profile"]
 
 if TYPE_CHECKING:
+    from fmuid.design import design
     from fmuid.diagnose import diagnose
     from fmuid.model.info import info
     from fmuid.results import load_result

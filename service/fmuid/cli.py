@@ -223,6 +223,22 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_design(args: argparse.Namespace) -> int:
+    from fmuid.data import load_spec
+    from fmuid.design import design, load_space
+
+    fmu, spec, space = _fmu_path(args.fmu), load_spec(Path(args.spec)), load_space(args.space)
+    with ProgressDisplay() as progress:
+        result = design(fmu, spec, space, workers=args.workers, progress=progress)
+    _write_json(Path(args.out), result.to_dict())
+    if args.report:
+        from fmuid.design.report import write_design_report
+
+        print(f"report: {write_design_report(result, Path(args.report))}")  # noqa: T201
+    print(f"recommended: {result.best.trial.label}, sensors {', '.join(result.best.trial.outputs)}")  # noqa: T201
+    return EXIT_OK
+
+
 def _report(
     result: Any, args: argparse.Namespace, fmu: Path, experiments: list[Any], spec: Any
 ) -> None:
@@ -303,6 +319,15 @@ def _parser() -> argparse.ArgumentParser:
     from fmuid.formats.cli import add_commands
 
     add_commands(sub)
+
+    p = sub.add_parser("design", help="propose the experiment that identifies the parameters")
+    p.add_argument("--fmu", required=True, help="FMU file or built-in model name")
+    p.add_argument("--spec", required=True, help="spec JSON: free parameters, bounds, nominal")
+    p.add_argument("--space", required=True, help="experiment space JSON (E.json)")
+    p.add_argument("--out", required=True, help="result JSON")
+    p.add_argument("--report", help="write index.html and plots into this folder")
+    p.add_argument("--workers", type=int, default=1, help="profile workers of the verification")
+    p.set_defaults(func=_cmd_design)
 
     p = sub.add_parser("serve", help="run the HTTP service")
     p.add_argument("--host", default="127.0.0.1")

@@ -70,6 +70,12 @@ def write_report(
         The ``index.html`` written.
 
     """
+    from fmuid.design import DesignResult
+
+    if isinstance(result, DesignResult):
+        from fmuid.design.report import write_design_report
+
+        return write_design_report(result, Path(directory))
     if problem is None and fmu is not None and experiments is not None and spec is not None:
         from fmuid.fit.problem import Problem
 
