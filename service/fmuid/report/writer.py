@@ -102,6 +102,8 @@ def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | 
                 label,
                 interval((p.lower, p.upper)),
                 p.scale,
+                p.status_reason,
+                p.quality.summary(),
             ]
         )
     page.table(
@@ -113,6 +115,8 @@ def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | 
             "label",
             "bounds",
             "scale",
+            "why this label",
+            "checks (quality)",
         ],
         rows,
         table_id="summary",
