@@ -110,6 +110,7 @@ def settle_branch(
     counts = _Counts()
     ends: dict[str, End] = {}
     known: list[WalkPoint] = []
+    fresh = True
     checks = options.checks
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
@@ -127,7 +128,6 @@ def settle_branch(
         )
         counts.jumps = max(counts.jumps, sum(1 for _, _, why in sites if why == "jump"))
         lower = None
-        fresh = True
         for site, diverse, _ in sites:
             others: list[np.ndarray] = []
             if diverse:
