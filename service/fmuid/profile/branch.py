@@ -67,7 +67,9 @@ def settle_branch(
     (:func:`fmuid.profile.ends.locate`). At each end and at each jump of the profile the
     other parameters are re-fitted from the other ``valleys`` of the fit check and, where the
     profile is non-parabolic, jumps, has another parameter on a bound, or ``thorough`` is set,
-    from diverse seeded starts. A lower chi2 there means the walk followed a higher valley:
+    from diverse starts: seeded Latin-hypercube points at the first such site, and at later
+    sites the distinct basins those starts reached (:func:`fmuid.profile.checks.basins`),
+    moved to the site. A lower chi2 there means the walk followed a higher valley:
     the stretch towards the estimate is re-walked from the lower valley, the walk goes on
     outwards from it, and the ends are located again.
 
