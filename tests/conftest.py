@@ -5,9 +5,15 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from fmuid.model.build import build_fmu, build_fmus
 from fmuid.model.builtin import model_src_dir
+
+#: Property tests draw the same examples on every run and machine, so that CI gives one verdict:
+#: Hypothesis's "ci" profile (derandomized, no example database, no deadline), loaded here even
+#: where the CI variable is not set. Settings objects made in test modules inherit it.
+settings.load_profile("ci")
 
 
 @pytest.fixture(scope="session")

@@ -1,7 +1,9 @@
 import html
 import re
+from dataclasses import replace
 from html.parser import HTMLParser
 
+from fmuid.profile.result import ProfileQuality
 from fmuid.report import write_report
 from plots.toy import toy_fit, toy_profile_result
 
@@ -99,3 +101,18 @@ def test_diagnosis_report_escapes_text(tmp_path):
     page = _parse(path)
     assert [r[0] for r in page.tables["summary"][1:]] == ["C_atf", "C_atr"]
     assert re.search(r"0\.1, \+\u221e", text)
+
+
+def test_profile_report_shows_each_label_reason_and_quality(tmp_path):
+    result = toy_profile_result()
+    k = result.parameters["k"]
+    quality = ProfileQuality(checks=2, starts=8, lower_valleys=1, rewalks=1, unsettled=("x y",))
+    k = replace(k, status_reason="the upper end is open: flat up to the bound", quality=quality)
+    result = replace(result, parameters={**result.parameters, "k": k})
+    page = _parse(write_report(result, tmp_path))
+    header, m_row, k_row = page.tables["summary"]
+    assert header[-2:] == ["why this label", "checks (quality)"]
+    assert k_row[-2] == "the upper end is open: flat up to the bound"
+    assert k_row[-1].startswith("2 checks (8 starts), 0 jumps, 1 lower valleys, 1 re-walks")
+    assert k_row[-1].endswith("; unsettled: x y")
+    assert m_row[-1].startswith("0 checks (0 starts)")
