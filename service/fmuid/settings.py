@@ -57,6 +57,19 @@ class Settings(BaseSettings):
         every job then run on its workers.
     host, port
         Where ``fmuid serve`` listens; loopback unless told otherwise.
+    queue_limit
+        Jobs that may wait at once; ``POST /v1/jobs`` answers 429 past it.
+    retention_s
+        Finished jobs, their results and files are removed this long after they finish [s];
+        0 keeps them for good.
+    disk_quota_bytes
+        Largest size of the data folder [bytes]; new jobs get 507 past it. 0: no quota.
+    min_free_bytes
+        Free space the data folder's file system needs [bytes]; below it new jobs get 507 and
+        health says degraded.
+    warm_start
+        Fork job processes from a server that imported the engine once (milliseconds per job)
+        instead of starting a new interpreter per job (seconds).
 
     """
 
@@ -73,6 +86,11 @@ class Settings(BaseSettings):
     dask_scheduler: str | None = None
     host: str = "127.0.0.1"
     port: int = Field(default=8000, ge=0, le=65535)
+    queue_limit: int = Field(default=100, ge=1)
+    retention_s: float = Field(default=30 * 86400.0, ge=0)
+    disk_quota_bytes: int = Field(default=0, ge=0)
+    min_free_bytes: int = Field(default=100 * 1024 * 1024, ge=0)
+    warm_start: bool = True
 
     @model_validator(mode="after")
     def _resolve_paths(self) -> Settings:

@@ -11,9 +11,11 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 
 from fmuid.api.auth import BearerAuth
+from fmuid.api.failures import add_failure_handlers
 from fmuid.api.limits import BodyLimit
 from fmuid.api.openapi import document_errors, validation_error
 from fmuid.api.routers import health, jobs, reports
+from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import JobStore
 from fmuid.jobs.worker import Supervisor
 from fmuid.settings import Settings
@@ -43,7 +45,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     """
     settings = settings or Settings()
-    store = JobStore(settings.database, settings.data_dir)
+    store = JobStore(settings.database, settings.data_dir, max_queued=settings.queue_limit)
     supervisor = Supervisor(settings, store)
 
     @asynccontextmanager
@@ -62,10 +64,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.store = store
     app.state.supervisor = supervisor
+    app.state.store_health = StoreHealth(
+        settings.database, settings.data_dir, settings.min_free_bytes, settings.disk_quota_bytes
+    )
     for router in (health.router, jobs.router, reports.router):
         app.include_router(router)
 
     app.add_exception_handler(RequestValidationError, validation_error)
+    add_failure_handlers(app)
     document_errors(app, secured=settings.api_token is not None)
 
     app.add_middleware(BodyLimit, limit=settings.max_upload_bytes)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from fastapi import HTTPException, Request
 
+from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import Job, JobStore
 from fmuid.jobs.worker import Supervisor
 from fmuid.settings import Settings
@@ -25,6 +26,12 @@ def get_supervisor(request: Request) -> Supervisor:
     """Return the supervisor running the jobs."""
     supervisor: Supervisor = request.app.state.supervisor
     return supervisor
+
+
+def get_store_health(request: Request) -> StoreHealth:
+    """Return the checks of the job store."""
+    checks: StoreHealth = request.app.state.store_health
+    return checks
 
 
 def get_job(job_id: str, request: Request) -> Job:

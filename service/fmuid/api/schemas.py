@@ -81,9 +81,12 @@ class JobList(BaseModel):
 class Health(BaseModel):
     """Answer of ``GET /v1/health``."""
 
-    status: Literal["ok"] = "ok"
-    queued: int = Field(description="Jobs waiting for a worker.")
-    running: int = Field(description="Jobs running now.")
+    status: Literal["ok", "degraded"] = Field(
+        default="ok", description="'degraded' when the job store or its disk has a problem."
+    )
+    problems: list[str] = Field(default=[], description="What is wrong when degraded.")
+    queued: int | None = Field(description="Jobs waiting for a worker (None: store unreadable).")
+    running: int | None = Field(description="Jobs running now (None: store unreadable).")
     workers: int = Field(description="Jobs that may run at the same time.")
     dask_scheduler: str | None = Field(description="Scheduler that profile branches run on.")
 

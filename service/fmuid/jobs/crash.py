@@ -2,7 +2,8 @@
 
 Job processes run with ``PYTHONFAULTHANDLER=1`` and their stderr in a log file, so a fatal
 signal leaves a Python traceback there; the innermost FMPy frame names the FMI call that was
-running (``doStep`` -> ``fmi2DoStep``).
+running (``doStep`` -> ``fmi2DoStep`` or ``fmi3DoStep``). The job process writes the FMU's FMI
+version to the log first (:data:`FMI_VERSION_LINE`), which says which of the two it was.
 """
 
 from __future__ import annotations
@@ -15,7 +16,11 @@ _FATAL = re.compile(r"Fatal Python error: (?P<what>[^\n]+)")
 _FRAME = re.compile(
     r'^\s+File "(?P<file>[^"]+)", line (?P<line>\d+) in (?P<func>\w+)', re.MULTILINE
 )
-_FMI_NAME = re.compile(r"fmi2[A-Z]\w*")
+_FMI_NAME = re.compile(r"fmi[23][A-Z]\w*")
+FMI_VERSION_LINE = "fmuid job: FMI version "
+STORE_FAILED_EXIT = 75
+"""Exit status of a job process that could not write its outcome to the job store."""
+_VERSION = re.compile(re.escape(FMI_VERSION_LINE) + r"(\d)")
 # what allocators print when an allocation fails (xmalloc-style C, C++'s std::bad_alloc, Python)
 _OUT_OF_MEMORY = re.compile(r"out of memory|bad_alloc|MemoryError|Cannot allocate memory", re.I)
 _SIGNAL_NAMES: dict[int, str] = {
@@ -43,25 +48,41 @@ def fmi_call_in_traceback(log: str) -> str | None:
     Returns
     -------
     str or None
-        E.g. ``"fmi2DoStep"``; ``None`` when the log has no fatal-error traceback naming one.
+        E.g. ``"fmi2DoStep"`` or ``"fmi3DoStep"``; ``None`` when the log has no fatal-error
+        traceback naming one.
 
     """
     fatal = list(_FATAL.finditer(log))
     if not fatal:
         return None
-    frames = list(_FRAME.finditer(log, fatal[-1].end()))
+    version = _VERSION.search(log)
+    prefix = f"fmi{version[1]}" if version else None
+    frames = list(_FRAME.finditer(_crashed_thread(log, fatal[-1].end())))
     if frames:
         innermost = frames[0]
         lineno = int(innermost["line"])
         source = "".join(linecache.getline(innermost["file"], n) for n in (lineno, lineno + 1))
-        named = _FMI_NAME.search(source)
+        named = _FMI_NAME.findall(source)
         if named:
-            return named.group(0)
+            return next((n for n in named if prefix and n.startswith(prefix)), named[0])
     for frame in frames:
         if "fmpy" in frame["file"] and frame["func"] not in ("w", "wrapper"):
             func = frame["func"]
-            return func if func.startswith("fmi2") else "fmi2" + func[0].upper() + func[1:]
+            if _FMI_NAME.fullmatch(func):
+                return func
+            module = re.search(r"(fmi[23])\.py$", frame["file"])
+            where = module[1] if module else prefix or "fmi2"
+            return where + func[0].upper() + func[1:]
     return None
+
+
+def _crashed_thread(log: str, start: int) -> str:
+    """Return the stack of the thread that crashed (faulthandler also lists the other threads)."""
+    current = log.find("Current thread", start)
+    if current == -1:
+        return log[start:]
+    end = log.find("\n\n", current)
+    return log[current : end if end != -1 else len(log)]
 
 
 def memory_message(memory_mb: int) -> str:
@@ -102,15 +123,19 @@ def exit_message(returncode: int, log: str, memory_mb: int) -> str:
         sig = -returncode
         if sig == signal.SIGKILL:
             return (
-                "the job process was killed (SIGKILL), most likely by the system's out-of-memory"
-                f" killer; the per-job memory limit is {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
+                "the job process was killed (SIGKILL) by the system's out-of-memory killer or an"
+                f" operator; the per-job memory limit is {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
             )
+        if sig == signal.SIGALRM:
+            return "the job process was ended at its time limit (SIGALRM, FMUID_JOB_TIMEOUT_S)"
         name = _SIGNAL_NAMES.get(sig, f"signal {sig}")
         where = fmi_call_in_traceback(log)
         place = f" in {where}" if where else " in native code"
         if _OUT_OF_MEMORY.search(log):
             return f"{memory_message(memory_mb)}: the FMU gave up ({name}){place}"
         return f"the FMU crashed ({name}){place}; the job process ended by signal {sig}"
+    if returncode == STORE_FAILED_EXIT:
+        return "the job store could not be written while the job ran (disk full or I/O error)"
     if _OUT_OF_MEMORY.search(log):
         return memory_message(memory_mb)
     return f"the job process exited with status {returncode} without a result"

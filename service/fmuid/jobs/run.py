@@ -1,19 +1,22 @@
 """Run one job in this process: ``python -m fmuid.jobs.run JOB_ID --db ... --data-dir ...``.
 
-The supervisor (:mod:`fmuid.jobs.worker`) starts one such process per job in a new session, so
-that a crash, a hang or runaway memory of the FMU hits only this process (and the pool workers
-the engine starts from it), which the supervisor can kill as a group. This process limits its own
-address space, loads the job's inputs from the store, runs the engine, reports progress at most
-every :data:`PROGRESS_INTERVAL_S` and stores the result (or the reason it failed), then writes
-the HTML report.
+The supervisor (:mod:`fmuid.jobs.worker`) starts one such process per job in a new session (with
+the bootstrap of :mod:`fmuid.jobs.proc`, which makes it die with the service), so that a crash, a
+hang or runaway memory of the FMU hits only this process (and the pool workers the engine starts
+from it), which the supervisor can kill as a group. This process limits its own address space,
+enforces its own time limit (it records the failure and kills its group), loads the job's inputs
+from the store, runs the engine, reports progress at most every :data:`PROGRESS_INTERVAL_S` and
+stores the result (or the reason it failed); then, in a step of its own that cannot fail the job,
+it draws the HTML report.
 """
 
 from __future__ import annotations
 
 import argparse
-import ctypes
+import contextlib
 import json
 import logging
+import math
 import os
 import re
 import resource
@@ -21,26 +24,30 @@ import shutil
 import signal
 import sys
 import tempfile
+import threading
 import time
 import traceback
+import zipfile
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
 from fmuid.errors import FmuidError
-from fmuid.jobs.crash import crash_message, memory_message
-from fmuid.jobs.store import Job, JobStore
+from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
+from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
 logger = logging.getLogger(__name__)
 
 PROGRESS_INTERVAL_S = 0.5
-_PR_SET_PDEATHSIG = 1
+ALARM_GRACE_S = 10
+"""The kernel's ``SIGALRM`` ends the job this long after its time limit if nothing else did."""
+_FMI_VERSION = re.compile(rb'fmiVersion\s*=\s*"([^"]{1,10})"')
 
 
 def limit_process(memory_mb: int) -> None:
-    """Cap this process's address space and core dumps, and die with the supervisor.
+    """Cap this process's address space and core dumps.
 
     ``RLIMIT_AS`` makes allocations past the limit fail (``MemoryError`` in Python, ``NULL``
     from ``malloc`` in the FMU) instead of exhausting the machine.
@@ -48,8 +55,27 @@ def limit_process(memory_mb: int) -> None:
     limit = memory_mb * 1024 * 1024
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+
+
+def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
+    """End this job (and its process group) ``timeout_s`` seconds from now, whatever it does.
+
+    A watchdog thread records the failure and kills the group; should it be stuck, ``SIGALRM``
+    (its default action ends the process, even inside native code) follows
+    :data:`ALARM_GRACE_S` later.
+    """
+
+    def expire() -> None:
+        try:
+            store.fail(job_id, f"exceeded the time limit of {timeout_s:g} s")
+        finally:
+            os.killpg(os.getpgrp(), signal.SIGKILL)
+
+    watchdog = threading.Timer(timeout_s, expire)
+    watchdog.daemon = True
+    watchdog.start()
+    signal.signal(signal.SIGALRM, signal.SIG_DFL)
+    signal.alarm(math.ceil(timeout_s) + ALARM_GRACE_S)
 
 
 class ProgressWriter:
@@ -66,7 +92,10 @@ class ProgressWriter:
         now = time.monotonic()
         if now - self._last >= self.interval or (event.total and event.done >= event.total):
             self._last = now
-            self.store.set_progress(self.job_id, event.done, event.total, event.stage)
+            try:
+                self.store.set_progress(self.job_id, event.done, event.total, event.stage)
+            except StoreError as exc:  # progress can wait; the outcome is written with retries
+                logger.warning("progress of job %s not recorded: %s", self.job_id, exc)
 
 
 def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[Path]]:
@@ -132,18 +161,23 @@ def run_engine(
 def write_report(
     result: Any, directory: Path, fmu: Path, experiments: list[Any], spec: Any
 ) -> None:
-    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not)."""
+    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not).
+
+    It is drawn in ``<directory>.tmp`` (made before the result was stored, so that the report
+    route knows it is coming; removed by the supervisor when the process ends) and renamed.
+    """
     error_file = directory.with_name(directory.name + ".error")
     tmp = directory.with_name(directory.name + ".tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
     try:
+        directory.parent.mkdir(parents=True, exist_ok=True)
         from fmuid.report import write_report as report
 
         report(result, tmp, fmu=fmu, experiments=experiments, spec=spec)
     except Exception as exc:  # a failed report must not fail a finished job
         logger.exception("report of %s failed", directory.name)
         shutil.rmtree(tmp, ignore_errors=True)
-        error_file.write_text(f"{type(exc).__name__}: {exc}")
+        with contextlib.suppress(OSError):
+            error_file.write_text(f"{type(exc).__name__}: {exc}")
         return
     shutil.rmtree(directory, ignore_errors=True)
     os.replace(tmp, directory)
@@ -158,6 +192,7 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
     with tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp:
         try:
             fmu, data = stage_inputs(store, job, Path(tmp))
+            _log_fmi_version(fmu)
             spec = spec_from_json(job.spec, "spec")
             experiments: list[Any] = []
             if job.kind == "design":
@@ -182,14 +217,38 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
                 crash_message(log, memory_mb) or "a worker process of the job died unexpectedly",
             )
             return 1
+        except StoreError as exc:
+            store.fail(job.id, f"the job store failed while the job ran: {exc}")
+            return 1
         except Exception as exc:
             traceback.print_exc()
             store.fail(job.id, f"internal error: {type(exc).__name__}: {exc}")
             return 1
-        write_report(result, report_dir / job.id, fmu, experiments, spec)
-        if not store.finish(job.id, result_json):
+        with contextlib.suppress(OSError):  # says "being drawn" to the report route
+            (report_dir / f"{job.id}.tmp").mkdir(parents=True, exist_ok=True)
+        try:
+            stored = store.finish(job.id, result_json)
+        except StoreError as exc:
+            store.fail(job.id, f"could not store the result: {exc}")
+            return 1
+        if not stored:
             logger.info("job %s was cancelled before it finished", job.id)
+            return 0
+        write_report(result, report_dir / job.id, fmu, experiments, spec)
     return 0
+
+
+def _log_fmi_version(fmu: Path) -> None:
+    """Write the FMU's FMI version to stderr (the job log), for :mod:`fmuid.jobs.crash`."""
+    try:
+        with zipfile.ZipFile(fmu) as archive, archive.open("modelDescription.xml") as xml:
+            head = xml.read(4096)
+    except (OSError, KeyError, zipfile.BadZipFile):
+        return
+    found = _FMI_VERSION.search(head)
+    if found:
+        sys.stderr.write(f"{FMI_VERSION_LINE}{found[1].decode(errors='replace')}\n")
+        sys.stderr.flush()
 
 
 def _read_log() -> str:
@@ -207,6 +266,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--db", type=Path, required=True)
     parser.add_argument("--data-dir", type=Path, required=True)
     parser.add_argument("--memory-mb", type=int, required=True)
+    parser.add_argument("--timeout-s", type=float, required=True)
     parser.add_argument("--dask-scheduler", default=None)
     args = parser.parse_args(argv)
     limit_process(args.memory_mb)
@@ -216,9 +276,13 @@ def main(argv: list[str] | None = None) -> int:
     if job is None or job.status != "running":
         logger.warning("job %s is not running; nothing to do", args.job_id)
         return 0
+    enforce_time_limit(store, job.id, args.timeout_s)
     report_dir = args.data_dir / "reports"
-    report_dir.mkdir(parents=True, exist_ok=True)
-    return run_job(store, job, report_dir, args.memory_mb, args.dask_scheduler)
+    try:
+        return run_job(store, job, report_dir, args.memory_mb, args.dask_scheduler)
+    except StoreError:
+        logger.exception("job %s could not record its outcome", job.id)
+        return STORE_FAILED_EXIT
 
 
 if __name__ == "__main__":

@@ -9,23 +9,37 @@ crash never leaves half a file under a final name.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import logging
 import os
 import sqlite3
 import threading
 import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
+from typing import ParamSpec, TypeVar
+
+from fmuid.jobs.records import Dataset, Job
+
+__all__ = ["Dataset", "Job", "JobStore", "QueueFull", "StoreError", "retried"]
+
+logger = logging.getLogger(__name__)
 
 KINDS = ("fit", "profile", "diagnose")
 STATUSES = ("queued", "running", "done", "failed", "cancelled")
 FINAL_STATUSES = ("done", "failed", "cancelled")
 MAX_ATTEMPTS = 3
 """A job interrupted by this many service restarts is failed instead of queued again."""
+
+WRITE_ATTEMPTS = 4
+"""A write that fails this many times (locked, I/O error, disk full) raises :class:`StoreError`."""
+RESERVE_BYTES = 4 * 1024 * 1024
+"""Size of ``<data_dir>/reserve``: given back to the file system when the disk is full, so that
+the store can still record why jobs failed."""
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -51,71 +65,53 @@ CREATE TABLE IF NOT EXISTS results (
     job_id TEXT PRIMARY KEY REFERENCES jobs (id),
     json TEXT NOT NULL
 );
+CREATE TABLE IF NOT EXISTS probe (id INTEGER PRIMARY KEY CHECK (id = 1), time REAL NOT NULL);
+CREATE TABLE IF NOT EXISTS lease (
+    id INTEGER PRIMARY KEY CHECK (id = 1),
+    pid INTEGER NOT NULL,
+    heartbeat REAL NOT NULL
+);
 """
 
-
-@dataclass(frozen=True)
-class Dataset:
-    """One uploaded CSV file: its original file name (the experiment name) and content hash."""
-
-    name: str
-    sha256: str
+P = ParamSpec("P")
+R = TypeVar("R")
 
 
-@dataclass(frozen=True)
-class Job:
-    """One row of the jobs table.
+class StoreError(RuntimeError):
+    """The job store could not be read or written (disk full, I/O error, damaged file)."""
 
-    Attributes
-    ----------
-    id
-        A UUID4 string.
-    kind
-        ``"fit"``, ``"profile"`` or ``"diagnose"``.
-    status
-        ``"queued"``, ``"running"``, ``"done"``, ``"failed"`` or ``"cancelled"``.
-    created, started, finished
-        Unix times [s]; ``started``/``finished`` are ``None`` until they happen.
-    progress_done, progress_total, progress_stage
-        The last progress event the job process reported.
-    error
-        Why the job failed or was cancelled.
-    fmu_sha256, model_name
-        The FMU (a blob) and its model name.
-    spec
-        The study specification as JSON text, exactly as submitted.
-    datasets
-        The CSV files, in submission order.
-    attempts
-        How many times a job process was started for it.
-    pid
-        Process id of its job process while running.
 
+class QueueFull(RuntimeError):
+    """The queue holds ``max_queued`` jobs already."""
+
+
+def retried(method: Callable[P, R]) -> Callable[P, R]:
+    """Retry a write of the store on transient SQLite errors; raise :class:`StoreError` at last.
+
+    Before retrying a write that failed for a full disk, the store gives back its reserve file.
     """
 
-    id: str
-    kind: str
-    status: str
-    created: float
-    started: float | None
-    finished: float | None
-    progress_done: int
-    progress_total: int
-    progress_stage: str
-    error: str | None
-    fmu_sha256: str
-    model_name: str
-    spec: str
-    datasets: tuple[Dataset, ...]
-    attempts: int
-    pid: int | None
+    @functools.wraps(method)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        store = args[0]
+        assert isinstance(store, JobStore)
+        for attempt in range(WRITE_ATTEMPTS):
+            try:
+                return method(*args, **kwargs)
+            except sqlite3.OperationalError as exc:  # locked, I/O error, disk full
+                error = exc
+                logger.warning("store %s failed (%s), attempt %d", method.__name__, exc, attempt)
+                if "full" in str(exc):
+                    store.release_reserve()
+                if attempt + 1 < WRITE_ATTEMPTS:
+                    time.sleep(0.05 * 4**attempt)
+            except sqlite3.DatabaseError as exc:  # a damaged file: trying again will not help
+                raise StoreError(f"job store {store.db_path}: {exc}") from exc
+        raise StoreError(
+            f"job store {store.db_path}: {method.__name__} failed {WRITE_ATTEMPTS} times: {error}"
+        ) from error
 
-    @classmethod
-    def from_row(cls, row: sqlite3.Row) -> Job:
-        """Build a job from a ``SELECT * FROM jobs`` row."""
-        values = dict(row)
-        values["datasets"] = tuple(Dataset(**d) for d in json.loads(values["datasets"]))
-        return cls(**values)
+    return wrapper
 
 
 class JobStore:
@@ -127,17 +123,25 @@ class JobStore:
         The SQLite file; created with its tables when missing.
     data_dir
         Folder of ``blobs/``; created when missing.
+    max_queued
+        :meth:`create` raises :class:`QueueFull` when this many jobs are queued already.
 
     """
 
-    def __init__(self, db_path: Path, data_dir: Path):
+    def __init__(self, db_path: Path, data_dir: Path, max_queued: int | None = None):
         self.db_path = Path(db_path)
+        self.max_queued = max_queued
         self.blob_dir = Path(data_dir) / "blobs"
         self.blob_dir.mkdir(parents=True, exist_ok=True)
         self.tmp_dir().mkdir(exist_ok=True)
         self.db_path.parent.mkdir(parents=True, exist_ok=True)
         self._local = threading.local()
-        self._connection().executescript(_SCHEMA)
+        self.reserve = Path(data_dir) / "reserve"
+        try:
+            self._connection().executescript(_SCHEMA)
+        except sqlite3.DatabaseError as exc:  # the service still starts, and says so in health
+            logger.error("job store %s cannot be opened: %s", self.db_path, exc)
+        self.keep_reserve()
 
     # -- connections -------------------------------------------------------------------------
 
@@ -153,16 +157,40 @@ class JobStore:
             self._local.pid = os.getpid()
         return conn
 
+    def keep_reserve(self) -> None:
+        """Create the reserve file when it is missing (and the disk has room for it)."""
+        if self.reserve.exists():
+            return
+        try:
+            with open(self.reserve.with_suffix(".tmp"), "wb") as stream:
+                stream.write(b"\0" * RESERVE_BYTES)
+            os.replace(self.reserve.with_suffix(".tmp"), self.reserve)
+        except OSError as exc:
+            logger.warning("no room for the reserve file %s: %s", self.reserve, exc)
+            self.reserve.with_suffix(".tmp").unlink(missing_ok=True)
+
+    def release_reserve(self) -> None:
+        """Delete the reserve file, giving its space back for the store's own writes."""
+        if self.reserve.exists():
+            logger.warning("disk full: releasing %s", self.reserve)
+            self.reserve.unlink(missing_ok=True)
+
+    def connection(self) -> sqlite3.Connection:
+        """Return this thread's connection (for checks; writes go through the store's methods)."""
+        return self._connection()
+
     @contextmanager
-    def _transaction(self) -> Iterator[sqlite3.Connection]:
+    def transaction(self) -> Iterator[sqlite3.Connection]:
+        """Run the block in one write transaction, rolled back when it (or its commit) fails."""
         conn = self._connection()
         conn.execute("BEGIN IMMEDIATE")
         try:
             yield conn
+            conn.execute("COMMIT")
         except BaseException:
-            conn.execute("ROLLBACK")
+            if conn.in_transaction:
+                conn.execute("ROLLBACK")
             raise
-        conn.execute("COMMIT")
 
     # -- blobs -------------------------------------------------------------------------------
 
@@ -191,6 +219,7 @@ class JobStore:
 
     # -- jobs --------------------------------------------------------------------------------
 
+    @retried
     def create(
         self,
         kind: str,
@@ -199,9 +228,22 @@ class JobStore:
         model_name: str,
         datasets: list[Dataset],
     ) -> Job:
-        """Insert a queued job and return it."""
+        """Insert a queued job and return it.
+
+        Raises
+        ------
+        QueueFull
+            When :attr:`max_queued` jobs are queued already.
+
+        """
         job_id = str(uuid.uuid4())
-        with self._transaction() as conn:
+        with self.transaction() as conn:
+            if self.max_queued is not None:
+                (queued,) = conn.execute(
+                    "SELECT COUNT(*) FROM jobs WHERE status = 'queued'"
+                ).fetchone()
+                if queued >= self.max_queued:
+                    raise QueueFull(f"the queue is full: {queued} jobs wait (FMUID_QUEUE_LIMIT)")
             conn.execute(
                 "INSERT INTO jobs (id, kind, status, created, fmu_sha256, model_name, spec,"
                 " datasets) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
@@ -244,9 +286,10 @@ class JobStore:
         rows = self._connection().execute("SELECT * FROM jobs WHERE status = 'running'")
         return [Job.from_row(r) for r in rows]
 
+    @retried
     def claim_next(self) -> Job | None:
         """Mark the oldest queued job running (one more attempt) and return it, or ``None``."""
-        with self._transaction() as conn:
+        with self.transaction() as conn:
             row = conn.execute(
                 "UPDATE jobs SET status = 'running', started = ?, attempts = attempts + 1,"
                 " error = NULL, progress_done = 0, progress_total = 0, progress_stage = ''"
@@ -256,20 +299,23 @@ class JobStore:
             ).fetchone()
         return Job.from_row(row) if row else None
 
+    @retried
     def set_pid(self, job_id: str, pid: int | None) -> None:
         """Record the process that runs a job."""
-        with self._transaction() as conn:
+        with self.transaction() as conn:
             conn.execute("UPDATE jobs SET pid = ? WHERE id = ?", (pid, job_id))
 
+    @retried
     def set_progress(self, job_id: str, done: int, total: int, stage: str) -> None:
         """Record a progress event of a running job."""
-        with self._transaction() as conn:
+        with self.transaction() as conn:
             conn.execute(
                 "UPDATE jobs SET progress_done = ?, progress_total = ?, progress_stage = ?"
                 " WHERE id = ? AND status = 'running'",
                 (done, total, stage, job_id),
             )
 
+    @retried
     def finish(self, job_id: str, result_json: str) -> bool:
         """Store the result (JSON text) of a running job and mark it done.
 
@@ -279,7 +325,7 @@ class JobStore:
             ``False`` when the job was no longer running (cancelled meanwhile): nothing stored.
 
         """
-        with self._transaction() as conn:
+        with self.transaction() as conn:
             cur = conn.execute(
                 "UPDATE jobs SET status = 'done', finished = ?, pid = NULL,"
                 " progress_done = MAX(progress_done, progress_total)"
@@ -301,8 +347,9 @@ class JobStore:
         """Mark a queued or running job cancelled; ``False`` if it was final already."""
         return self._finalise(job_id, "cancelled", "cancelled by request")
 
+    @retried
     def _finalise(self, job_id: str, status: str, error: str) -> bool:
-        with self._transaction() as conn:
+        with self.transaction() as conn:
             cur = conn.execute(
                 "UPDATE jobs SET status = ?, error = ?, finished = ?, pid = NULL"
                 " WHERE id = ? AND status IN ('queued', 'running')",
@@ -319,6 +366,7 @@ class JobStore:
         )
         return row[0] if row else None
 
+    @retried
     def recover(self) -> list[Job]:
         """Put jobs left running by a stopped service back in the queue.
 
@@ -331,7 +379,7 @@ class JobStore:
             The jobs as they were found (status ``running``), with the pid of their process.
 
         """
-        with self._transaction() as conn:
+        with self.transaction() as conn:
             rows = conn.execute("SELECT * FROM jobs WHERE status = 'running'").fetchall()
             conn.execute(
                 "UPDATE jobs SET status = 'failed', finished = ?, pid = NULL, error ="

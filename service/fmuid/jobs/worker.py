@@ -1,57 +1,49 @@
 """The supervisor: a thread in the service that runs queued jobs, each in its own process.
 
-Every job runs in ``python -m fmuid.jobs.run`` started in a new session (its own process group),
-with its stderr in ``<data_dir>/logs/<job id>.log``. The supervisor keeps at most
+Every job runs in a job process (:mod:`fmuid.jobs.run`, started as :mod:`fmuid.jobs.proc` says)
+in a new session (its own process group), with its stderr in ``<data_dir>/logs/<job id>.log`` and
+its temporary files in :func:`fmuid.jobs.housekeeping.job_tmp_dir`. The supervisor keeps at most
 ``settings.workers`` of them alive, kills a group past ``settings.job_timeout_s`` or when its job
 is cancelled, and, when a process ends without recording an outcome (a segfault, the OOM killer),
-fails its job with the reason read from the exit status and the log.
+fails its job with the reason read from the exit status and the log; when the store cannot take
+that outcome (a full disk), it tries again on every round until it can.
+
+The service holds a lease in the store. On start it takes the lease, kills every process left by
+the previous run of the same store, queues the interrupted jobs again and removes their leftover
+files. Every :data:`MAINTENANCE_S` it removes jobs past ``settings.retention_s`` and files no job
+owns.
 """
 
 from __future__ import annotations
 
 import logging
-import os
-import signal
-import subprocess
-import sys
+import sqlite3
 import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO
 
+from fmuid.jobs import housekeeping as hk
 from fmuid.jobs.crash import exit_message
-from fmuid.jobs.store import Job, JobStore
+from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmServer
+from fmuid.jobs.proc import end_processes, find_job_processes, kill_group
+from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.settings import Settings
 
 logger = logging.getLogger(__name__)
 
 POLL_S = 0.2
+LEASE_RENEW_S = 3.0
+MAINTENANCE_S = 30.0
+FAILED_ROUND_PAUSE_S = 2.0
 
 
 @dataclass
 class _Running:
     job: Job
-    process: subprocess.Popen[bytes]
-    log: IO[bytes]
+    process: JobProcess
     log_path: Path
     started: float = field(default_factory=time.monotonic)
-
-
-def kill_group(pid: int) -> None:
-    """Send SIGKILL to the process group led by ``pid`` (a job process), if it still exists."""
-    try:
-        os.killpg(pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        pass
-
-
-def _is_job_process(pid: int, job_id: str) -> bool:
-    try:
-        cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
-    except OSError:
-        return False
-    return b"fmuid.jobs.run" in cmdline and job_id.encode() in cmdline
 
 
 class Supervisor:
@@ -76,6 +68,11 @@ class Supervisor:
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._unrecorded: dict[str, str] = {}  # job id -> failure the store could not take yet
+        self._renewed = 0.0
+        self._maintained = 0.0
+        self._recovered = False
+        self._warm = WarmServer(settings.database)
 
     @property
     def busy(self) -> int:
@@ -84,14 +81,41 @@ class Supervisor:
             return len(self._running)
 
     def start(self) -> None:
-        """Requeue jobs a stopped service left running, then start the supervisor thread."""
-        for job in self.store.recover():
-            if job.pid and _is_job_process(job.pid, job.id):
-                logger.warning("killing job process %s left over from a previous run", job.pid)
-                kill_group(job.pid)
-            logger.info("job %s was running when the service stopped: queued again", job.id)
+        """Take the store's lease, end what a previous run left, requeue its jobs, then start.
+
+        A store that cannot be read or written now is tried again every round; no job starts
+        until then.
+
+        Raises
+        ------
+        LeaseHeld
+            When another live service uses the same store.
+
+        """
+        try:
+            self._recover()
+        except hk.LeaseHeld:
+            raise
+        except (StoreError, sqlite3.Error):
+            logger.exception("cannot recover the jobs of %s yet", self.settings.database)
         self._thread = threading.Thread(target=self._loop, name="fmuid-supervisor", daemon=True)
         self._thread.start()
+
+    def _recover(self) -> None:
+        hk.take_lease(self.store)
+        self._renewed = time.monotonic()
+        leftovers = find_job_processes(self.settings.database)
+        if leftovers:
+            logger.warning("ending %d process(es) of a previous run: %s", len(leftovers), leftovers)
+            stuck = end_processes(leftovers)
+            if stuck:
+                logger.error("processes of a previous run would not die: %s", stuck)
+        for job in self.store.recover():
+            logger.info("job %s was running when the service stopped: queued again", job.id)
+        hk.remove_orphans(self.store, self.settings.data_dir, alive=set())
+        for partial in (self.settings.data_dir / "reports").glob("*.tmp"):
+            hk.remove_paths([partial])
+        self._recovered = True
 
     def stop(self) -> None:
         """Stop taking jobs and kill the running job processes.
@@ -106,8 +130,12 @@ class Supervisor:
             for run in self._running.values():
                 kill_group(run.process.pid)
                 run.process.wait()
-                run.log.close()
+                hk.remove_paths([hk.job_tmp_dir(self.settings.data_dir, run.job.id)])
             self._running.clear()
+        try:
+            hk.release_lease(self.store)
+        except StoreError:
+            logger.exception("could not release the lease of the job store")
 
     def wake(self) -> None:
         """Look at the queue now (a job was submitted or cancelled)."""
@@ -124,12 +152,18 @@ class Supervisor:
     def _loop(self) -> None:
         while not self._stop.is_set():
             try:
+                if not self._recovered:
+                    self._recover()
                 self._reap()
+                self._record_unrecorded()
                 self._enforce_limits()
+                self._housekeeping()
                 self._launch()
+                delay = POLL_S
             except Exception:  # keep supervising whatever one iteration hit
                 logger.exception("supervisor iteration failed")
-            self._wake.wait(POLL_S)
+                delay = FAILED_ROUND_PAUSE_S
+            self._wake.wait(delay)
             self._wake.clear()
 
     def _launch(self) -> None:
@@ -139,40 +173,53 @@ class Supervisor:
                 return
             self._spawn(job)
 
+    def _housekeeping(self) -> None:
+        now = time.monotonic()
+        if now - self._renewed > LEASE_RENEW_S:
+            hk.renew_lease(self.store)
+            self._renewed = now
+        retention = self.settings.retention_s
+        interval = min(MAINTENANCE_S, retention / 4) if retention > 0 else MAINTENANCE_S
+        if now - self._maintained < interval:
+            return
+        self._maintained = now
+        if retention > 0:
+            expired = hk.expired_jobs(self.store, retention)
+            for job_id in hk.delete_jobs(self.store, self.settings.data_dir, expired):
+                logger.info("job %s removed by retention (FMUID_RETENTION_S)", job_id)
+        with self._lock:
+            alive = set(self._running)
+        hk.remove_orphans(self.store, self.settings.data_dir, alive)
+        hk.remove_unused_blobs(self.store, self.settings.data_dir)
+        self.store.keep_reserve()
+
     def _spawn(self, job: Job) -> None:
-        cmd = [
-            sys.executable,
-            "-m",
-            "fmuid.jobs.run",
-            job.id,
+        args = [
             "--db",
             str(self.settings.database),
             "--data-dir",
             str(self.settings.data_dir),
             "--memory-mb",
             str(self.settings.job_memory_mb),
+            "--timeout-s",
+            str(self.settings.job_timeout_s),
         ]
         if self.settings.dask_scheduler:
-            cmd += ["--dask-scheduler", self.settings.dask_scheduler]
+            args += ["--dask-scheduler", self.settings.dask_scheduler]
         log_path = self.log_dir / f"{job.id}.log"
-        log = open(log_path, "ab")  # noqa: SIM115 - closed when the process is reaped
-        env = dict(os.environ, PYTHONFAULTHANDLER="1")
+        tmp = hk.job_tmp_dir(self.settings.data_dir, job.id)
+        launch = Launch(job.id, args, log_path, tmp, self.settings.database)
         try:
-            process = subprocess.Popen(
-                cmd,
-                stdin=subprocess.DEVNULL,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                env=env,
-                start_new_session=True,
+            tmp.mkdir(parents=True, exist_ok=True)
+            process: JobProcess = (
+                self._warm.start(launch) if self.settings.warm_start else ColdProcess(launch)
             )
         except OSError as exc:
-            log.close()
             self.store.fail(job.id, f"could not start a job process: {exc}")
             return
         self.store.set_pid(job.id, process.pid)
         with self._lock:
-            self._running[job.id] = _Running(job, process, log, log_path)
+            self._running[job.id] = _Running(job, process, log_path)
         logger.info("job %s (%s) started in process %s", job.id, job.kind, process.pid)
 
     def _enforce_limits(self) -> None:
@@ -189,26 +236,27 @@ class Supervisor:
 
     def _reap(self) -> None:
         with self._lock:
-            ended = [run for run in self._running.values() if _has_exited(run.process)]
+            ended = [run for run in self._running.values() if run.process.exited()]
             for run in ended:
                 del self._running[run.job.id]
         for run in ended:
             kill_group(run.process.pid)  # pool workers the job left behind, before pid reuse
             returncode = run.process.wait()
-            run.log.close()
+            data_dir = self.settings.data_dir
+            partial = data_dir / "reports" / f"{run.job.id}.tmp"
+            hk.remove_paths([hk.job_tmp_dir(data_dir, run.job.id), partial])
+            logger.info("job %s process ended with status %s", run.job.id, returncode)
             job = self.store.get(run.job.id)
             if job is not None and job.status == "running":
                 log = run.log_path.read_text(errors="replace")
-                self.store.fail(job.id, exit_message(returncode, log, self.settings.job_memory_mb))
-            logger.info("job %s process ended with status %s", run.job.id, returncode)
+                reason = exit_message(returncode, log, self.settings.job_memory_mb)
+                self._unrecorded[job.id] = reason
 
-
-def _has_exited(process: subprocess.Popen[bytes]) -> bool:
-    """Whether a child has exited, without reaping it (its pid stays reserved until then)."""
-    if process.returncode is not None:
-        return True
-    try:
-        info = os.waitid(os.P_PID, process.pid, os.WEXITED | os.WNOHANG | os.WNOWAIT)
-    except ChildProcessError:
-        return True
-    return info is not None
+    def _record_unrecorded(self) -> None:
+        for job_id, reason in list(self._unrecorded.items()):
+            try:
+                self.store.fail(job_id, reason)
+            except StoreError:
+                logger.exception("cannot record that job %s failed yet", job_id)
+                return
+            del self._unrecorded[job_id]

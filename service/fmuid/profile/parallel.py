@@ -19,6 +19,7 @@ import numpy as np
 from fmuid.fit.problem import Problem
 from fmuid.model.simulator import get_simulator, mark_reset_unreliable, register_fmu_copy
 from fmuid.profile.branch import BranchResult, settle_branch
+from fmuid.profile.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 from fmuid.profile.walk import WalkOptions
 
 _PROGRESS_QUEUE: Any = None
@@ -72,8 +73,10 @@ def run_branch(task: BranchTask) -> BranchResult:
     return task.walk(on_point)
 
 
-def _init_worker(progress_queue: Any) -> None:
+def _init_worker(progress_queue: Any, owner: int) -> None:
+    """Set up a pool worker: it dies with its parent (``PR_SET_PDEATHSIG``) and reports points."""
     global _PROGRESS_QUEUE
+    die_with_pool_owner(owner)
     _PROGRESS_QUEUE = progress_queue
 
 
@@ -116,10 +119,14 @@ def run_branches(
 
             out.append(task.walk(report))
         return out
-    ctx = multiprocessing.get_context("fork")
+    # forkserver, not fork: this process may have threads (BLAS, a job's watchdog); the server
+    # dies with this process, and its workers with it (see fmuid.profile.pool_guard)
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["fmuid.profile.forkserver_guard", __name__])
+    os.environ[POOL_PARENT_ENV] = str(os.getpid())
     progress_queue = ctx.Queue()
     with ProcessPoolExecutor(
-        n, mp_context=ctx, initializer=_init_worker, initargs=(progress_queue,)
+        n, mp_context=ctx, initializer=_init_worker, initargs=(progress_queue, os.getpid())
     ) as pool:
         futures: list[Future[BranchResult]] = [pool.submit(run_branch, t) for t in tasks]
         pending = set(futures)

@@ -1,4 +1,4 @@
-"""``/v1/jobs``: submit, list, inspect, fetch the result of and cancel jobs."""
+"""``/v1/jobs``: submit, list, inspect, fetch the result of, cancel and remove jobs."""
 
 from __future__ import annotations
 
@@ -6,10 +6,12 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, File, Form, HTTPException, Query, Response, UploadFile
 
-from fmuid.api.deps import get_job, get_settings, get_store, get_supervisor
+from fmuid.api.deps import get_job, get_settings, get_store, get_store_health, get_supervisor
 from fmuid.api.schemas import ErrorOut, JobCreated, JobList, JobOut, Kind
 from fmuid.api.submission import SubmissionError, Upload, submit
-from fmuid.jobs.store import FINAL_STATUSES, Job, JobStore
+from fmuid.jobs.health import StoreHealth
+from fmuid.jobs.housekeeping import delete_jobs
+from fmuid.jobs.store import FINAL_STATUSES, Job, JobStore, QueueFull
 from fmuid.jobs.worker import Supervisor
 from fmuid.settings import Settings
 
@@ -31,7 +33,9 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
         401: _ERRORS[401],
         413: {"model": ErrorOut, "description": "The request body exceeds the upload limit."},
         422: {"description": "Bad FMU, CSV or spec, or they do not fit together."},
+        429: {"model": ErrorOut, "description": "The queue is full (FMUID_QUEUE_LIMIT)."},
         503: {"model": ErrorOut, "description": "The named built-in model is not built."},
+        507: {"model": ErrorOut, "description": "The disk is full or the data over its quota."},
     },
 )
 def create_job(
@@ -44,6 +48,7 @@ def create_job(
     store: Annotated[JobStore, Depends(get_store)],
     settings: Annotated[Settings, Depends(get_settings)],
     supervisor: Annotated[Supervisor, Depends(get_supervisor)],
+    checks: Annotated[StoreHealth, Depends(get_store_health)],
     space: Annotated[
         UploadFile | None, File(description="Experiment space JSON (kind 'design' only).")
     ] = None,
@@ -53,6 +58,14 @@ def create_job(
     ] = None,
 ) -> JobCreated:
     """Check the inputs and queue a job; its id comes back at once (202)."""
+    no_room = checks.room_problems()
+    if no_room:
+        raise HTTPException(status_code=507, detail="; ".join(no_room))
+    queued = store.counts()["queued"]
+    if queued >= settings.queue_limit:
+        raise HTTPException(
+            status_code=429, detail=f"the queue is full: {queued} jobs wait (FMUID_QUEUE_LIMIT)"
+        )
     try:
         job = submit(
             store,
@@ -66,6 +79,8 @@ def create_job(
         )
     except SubmissionError as exc:
         raise HTTPException(status_code=exc.status_code, detail=str(exc)) from exc
+    except QueueFull as exc:
+        raise HTTPException(status_code=429, detail=str(exc)) from exc
     supervisor.wake()
     return JobCreated(id=job.id)
 
@@ -108,19 +123,21 @@ def get_result(
     return Response(content=text, media_type="application/json")
 
 
-@router.delete(
-    "/{job_id}",
-    response_model=JobOut,
-    responses={**_ERRORS, 409: {"model": ErrorOut, "description": "The job has finished."}},
-)
-def cancel_job(
+@router.delete("/{job_id}", response_model=JobOut, responses=_ERRORS)
+def cancel_or_remove_job(
     job: Annotated[Job, Depends(get_job)],
     store: Annotated[JobStore, Depends(get_store)],
     supervisor: Annotated[Supervisor, Depends(get_supervisor)],
+    settings: Annotated[Settings, Depends(get_settings)],
 ) -> JobOut:
-    """Cancel a queued or running job; its process is killed at once."""
-    if job.status in FINAL_STATUSES and job.status != "cancelled":
-        raise HTTPException(status_code=409, detail=f"job {job.id} is already {job.status}")
+    """Cancel a queued or running job (its process is killed at once); remove a finished one.
+
+    A finished job (done, failed or cancelled) is removed with its result, report, log and the
+    uploads no other job uses; the answer is its last state, and it is 404 afterwards.
+    """
+    if job.status in FINAL_STATUSES:
+        delete_jobs(store, settings.data_dir, [job.id])
+        return JobOut.from_job(job)
     if store.cancel(job.id):
         supervisor.cancel(job.id)
     current = store.get(job.id)

@@ -1,13 +1,15 @@
 """``/v1/jobs/{id}/report``: the HTML report of a done job and the image files beside it.
 
 The job process writes the report (``<data_dir>/reports/<id>/index.html`` and PNGs) right after
-the result; here it is only served. The page gets ``<base href="report/">`` so that its relative
-image links resolve under ``/v1/jobs/{id}/report/``.
+storing the result; here it is only served (after waiting while it is still being drawn). The
+page gets ``<base href="report/">`` so that its relative image links resolve under
+``/v1/jobs/{id}/report/``.
 """
 
 from __future__ import annotations
 
 import re
+import time
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -21,6 +23,8 @@ from fmuid.settings import Settings
 
 router = APIRouter(prefix="/v1/jobs", tags=["reports"])
 
+REPORT_WAIT_S = 60.0
+"""The result is stored before the report is drawn: a report asked for meanwhile waits this long."""
 _FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 _RESPONSES: dict[int | str, dict[str, Any]] = {
     401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
@@ -34,6 +38,7 @@ def _report_dir(job: Job, settings: Settings) -> Path:
     if job.status != "done":
         raise HTTPException(status_code=409, detail=f"job {job.id} is {job.status}; no report")
     directory = settings.data_dir / "reports" / job.id
+    _wait_while_drawn(directory)
     error = directory.with_name(job.id + ".error")
     if error.is_file():
         raise HTTPException(
@@ -44,6 +49,14 @@ def _report_dir(job: Job, settings: Settings) -> Path:
             status_code=503, detail=f"no report was written for job {job.id} (fmuid.report missing)"
         )
     return directory
+
+
+def _wait_while_drawn(directory: Path) -> None:
+    """Wait (at most :data:`REPORT_WAIT_S`) while the job process draws the report of a done job."""
+    drawing = directory.with_name(directory.name + ".tmp")
+    deadline = time.monotonic() + REPORT_WAIT_S
+    while drawing.is_dir() and not directory.is_dir() and time.monotonic() < deadline:
+        time.sleep(0.1)
 
 
 @router.get(

@@ -1,0 +1,71 @@
+"""The rows of the job store as values: :class:`Job` and its :class:`Dataset` files."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """One uploaded CSV file: its original file name (the experiment name) and content hash."""
+
+    name: str
+    sha256: str
+
+
+@dataclass(frozen=True)
+class Job:
+    """One row of the jobs table.
+
+    Attributes
+    ----------
+    id
+        A UUID4 string.
+    kind
+        ``"fit"``, ``"profile"`` or ``"diagnose"``.
+    status
+        ``"queued"``, ``"running"``, ``"done"``, ``"failed"`` or ``"cancelled"``.
+    created, started, finished
+        Unix times [s]; ``started``/``finished`` are ``None`` until they happen.
+    progress_done, progress_total, progress_stage
+        The last progress event the job process reported.
+    error
+        Why the job failed or was cancelled.
+    fmu_sha256, model_name
+        The FMU (a blob) and its model name.
+    spec
+        The study specification as JSON text, exactly as submitted.
+    datasets
+        The CSV files, in submission order.
+    attempts
+        How many times a job process was started for it.
+    pid
+        Process id of its job process while running.
+
+    """
+
+    id: str
+    kind: str
+    status: str
+    created: float
+    started: float | None
+    finished: float | None
+    progress_done: int
+    progress_total: int
+    progress_stage: str
+    error: str | None
+    fmu_sha256: str
+    model_name: str
+    spec: str
+    datasets: tuple[Dataset, ...]
+    attempts: int
+    pid: int | None
+
+    @classmethod
+    def from_row(cls, row: sqlite3.Row) -> Job:
+        """Build a job from a ``SELECT * FROM jobs`` row."""
+        values = dict(row)
+        values["datasets"] = tuple(Dataset(**d) for d in json.loads(values["datasets"]))
+        return cls(**values)
