@@ -5,9 +5,15 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
-from fmuid.model.build import build_fmus
+from fmuid.model.build import build_fmu, build_fmus
 from fmuid.model.builtin import model_src_dir
+
+#: Property tests draw the same examples on every run and machine, so that CI gives one verdict:
+#: Hypothesis's "ci" profile (derandomized, no example database, no deadline), loaded here even
+#: where the CI variable is not set. Settings objects made in test modules inherit it.
+settings.load_profile("ci")
 
 
 @pytest.fixture(scope="session")
@@ -30,3 +36,23 @@ def msd_fmu(built_fmus: dict[str, Path]) -> Path:
 @pytest.fixture(scope="session")
 def msd_parallel_fmu(built_fmus: dict[str, Path]) -> Path:
     return built_fmus["msd_parallel"]
+
+
+@pytest.fixture(scope="session")
+def first_order_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tests/pythonfmu_src/first_order.py`` built by pythonfmu: a second FMI 2.0 exporter."""
+    pythonfmu = pytest.importorskip(
+        "pythonfmu", reason="pythonfmu is not installed (pip install -e '.[dev]')"
+    )
+    if not pythonfmu.FmuBuilder.has_binary():
+        pytest.skip("pythonfmu ships no FMU binary for this platform")
+    source = Path(__file__).parent / "pythonfmu_src" / "first_order.py"
+    out = tmp_path_factory.mktemp("pythonfmu")
+    return Path(pythonfmu.FmuBuilder.build_FMU(source, dest=out))
+
+
+@pytest.fixture(scope="session")
+def leaky_reset_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tests/model/fmus_src/leaky_reset``: msd physics whose reset keeps a growing offset."""
+    source = Path(__file__).parent / "model" / "fmus_src" / "leaky_reset"
+    return build_fmu(model_src_dir(), source, tmp_path_factory.mktemp("leaky"))

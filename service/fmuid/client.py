@@ -76,19 +76,22 @@ class FmuidClient:
         data_paths: list[str | Path],
         fmu_path: str | Path | None = None,
         model: str | None = None,
+        space_path: str | Path | None = None,
     ) -> str:
         """Submit a job and return its id.
 
         Parameters
         ----------
         kind
-            ``"fit"``, ``"profile"`` or ``"diagnose"``.
+            ``"fit"``, ``"profile"``, ``"diagnose"`` or ``"design"``.
         spec
             The spec as JSON text, or a dict to be sent as JSON.
         data_paths
             CSV files, one per experiment (their names become the experiment names).
         fmu_path, model
             An FMU file to upload, or the name of a built-in FMU (exactly one).
+        space_path
+            The experiment space JSON of a ``"design"`` job (which takes no CSV files).
 
         Raises
         ------
@@ -108,6 +111,9 @@ class FmuidClient:
             if fmu_path is not None:
                 stream = stack.enter_context(open(fmu_path, "rb"))
                 files.append(("fmu", (Path(fmu_path).name, stream, "application/zip")))
+            if space_path is not None:
+                stream = stack.enter_context(open(space_path, "rb"))
+                files.append(("space", (Path(space_path).name, stream, "application/json")))
             response = self._call("POST", "/v1/jobs", data=form, files=files)
         job_id: str = response.json()["id"]
         return job_id

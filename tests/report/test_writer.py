@@ -1,7 +1,9 @@
 import html
 import re
+from dataclasses import replace
 from html.parser import HTMLParser
 
+from fmuid.profile.result import ProfileQuality
 from fmuid.report import write_report
 from plots.toy import toy_fit, toy_profile_result
 
@@ -60,8 +62,8 @@ def test_profile_report_lists_parameters_and_images_exist(tmp_path):
     rows = page.tables["summary"][1:]
     assert [r[0] for r in rows] == list(result.parameters)
     k = rows[1]
-    assert k[4] == "practically non identifiable"
-    assert k[2].endswith("+\u221e]")
+    assert k[5] == "practically non identifiable"
+    assert k[3].endswith("+\u221e]")
     study = dict((r[0], r[1]) for r in page.tables["study"][1:])
     assert study["threshold simultaneous (chi2 rise)"] == "2.28"
     assert study["sigma x"] == "0.1 (given)"
@@ -99,3 +101,19 @@ def test_diagnosis_report_escapes_text(tmp_path):
     page = _parse(path)
     assert [r[0] for r in page.tables["summary"][1:]] == ["C_atf", "C_atr"]
     assert re.search(r"0\.1, \+\u221e", text)
+
+
+def test_profile_report_shows_each_label_reason_and_quality(tmp_path):
+    result = toy_profile_result()
+    k = result.parameters["k"]
+    quality = ProfileQuality(checks=2, starts=8, lower_valleys=1, rewalks=1, unsettled=("x y",))
+    k = replace(k, status_reason="the upper end is open: flat up to the bound", quality=quality)
+    result = replace(result, parameters={**result.parameters, "k": k})
+    page = _parse(write_report(result, tmp_path))
+    header, m_row, k_row = page.tables["summary"]
+    why, checked = header.index("why"), header.index("quality")
+    assert k_row[why] == "the upper end is open: flat up to the bound"
+    assert k_row[checked] == (
+        "not settled: x y (2 valley checks, 8 starts, 1 lower valley, 1 re-walk)"
+    )
+    assert m_row[checked] == "settled"

@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field
 
 from fmuid.jobs.store import Job
 
-Kind = Literal["fit", "profile", "diagnose"]
+Kind = Literal["fit", "profile", "diagnose", "design"]
 Status = Literal["queued", "running", "done", "failed", "cancelled"]
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
-from fmuid.data import check_against_model, load_experiment, spec_from_json
+from fmuid.data import Spec, check_against_model, load_experiment, spec_from_json
 from fmuid.errors import FmuidError
 from fmuid.jobs.fmucheck import check_fmu
 from fmuid.jobs.store import Dataset, Job, JobStore
@@ -93,6 +93,7 @@ def submit(
     fmu: Upload | None,
     model: str | None,
     max_fmu_unpacked_bytes: int,
+    space: Upload | None = None,
 ) -> Job:
     """Check a submission and queue its job.
 
@@ -101,7 +102,7 @@ def submit(
     store
         Where the files and the job go.
     kind
-        ``"fit"``, ``"profile"`` or ``"diagnose"``.
+        ``"fit"``, ``"profile"``, ``"diagnose"`` or ``"design"``.
     spec
         The study specification (JSON text).
     data
@@ -110,6 +111,8 @@ def submit(
         An uploaded FMU or the name of a built-in one (exactly one of them).
     max_fmu_unpacked_bytes
         Largest accepted unpacked size of an uploaded FMU [bytes].
+    space
+        The experiment space JSON (kind ``"design"``, which takes no data).
 
     Returns
     -------
@@ -126,6 +129,12 @@ def submit(
         parsed_spec = spec_from_json(spec, "spec")
     except FmuidError as exc:
         raise SubmissionError(422, str(exc)) from exc
+    if kind == "design":
+        return _submit_design(
+            store, spec, parsed_spec, data, space, fmu, model, max_fmu_unpacked_bytes
+        )
+    if space is not None:
+        raise SubmissionError(422, f"space: only kind 'design' takes a space, not {kind!r}")
     if not data:
         raise SubmissionError(422, "data: give at least one CSV file")
     names = [safe_name(upload.filename, "data") for upload in data]
@@ -140,6 +149,9 @@ def submit(
             _save(upload, path)
         try:
             fmu_path, fmu_model = _load_fmu(workdir, fmu, model, max_fmu_unpacked_bytes)
+            wrong_interface = fmu_model.interface_problem(parsed_spec.interface)
+            if wrong_interface:
+                raise SubmissionError(422, f"spec: interface: {wrong_interface}")
             experiments = [load_experiment(path) for path in paths]
             check_against_model(
                 parsed_spec,
@@ -153,3 +165,35 @@ def submit(
         fmu_sha = store.add_file(fmu_path)
         datasets = [Dataset(name, store.add_file(path)) for name, path in zip(names, paths)]
     return store.create(kind, spec, fmu_sha, fmu_model.model_name, datasets)
+
+
+def _submit_design(
+    store: JobStore,
+    spec: str,
+    parsed_spec: Spec,
+    data: list[Upload],
+    space: Upload | None,
+    fmu: Upload | None,
+    model: str | None,
+    max_fmu_unpacked_bytes: int,
+) -> Job:
+    """Check and queue a design job: the space is stored as its one dataset, ``space.json``."""
+    from fmuid.design.space import check_design, space_from_json
+
+    if data:
+        raise SubmissionError(422, "data: kind 'design' takes a 'space' file, not data")
+    if space is None:
+        raise SubmissionError(422, "space: kind 'design' needs the experiment space (E.json)")
+    with tempfile.TemporaryDirectory(dir=store.tmp_dir()) as tmp:
+        workdir = Path(tmp)
+        space_path = workdir / "space.json"
+        _save(space, space_path)
+        try:
+            fmu_path, fmu_model = _load_fmu(workdir, fmu, model, max_fmu_unpacked_bytes)
+            parsed = space_from_json(space_path.read_text(errors="replace"), "space")
+            check_design(parsed, parsed_spec, fmu_model)
+        except FmuidError as exc:
+            raise SubmissionError(422, str(exc)) from exc
+        fmu_sha = store.add_file(fmu_path)
+        datasets = [Dataset("space.json", store.add_file(space_path))]
+    return store.create("design", spec, fmu_sha, fmu_model.model_name, datasets)

@@ -132,12 +132,15 @@ def run_engine(
     progress: ProgressWriter,
     dask_scheduler: str | None,
 ) -> Any:
-    """Call ``fmuid.fit``, ``fmuid.profile`` or ``fmuid.diagnose`` and return its result."""
+    """Call ``fmuid.fit``, ``profile``, ``diagnose`` or ``design`` and return its result.
+
+    For ``design``, ``experiments`` holds the experiment space instead of datasets.
+    """
     import fmuid
 
     if kind == "fit":
         return fmuid.fit(fmu, experiments, spec, progress=progress)
-    if kind == "profile":
+    if kind in ("profile", "design"):
         with ExitStack() as stack:
             executor = None
             if dask_scheduler:
@@ -149,6 +152,8 @@ def run_engine(
                     raise FmuidError(
                         f"cannot reach the dask scheduler at {dask_scheduler}: {exc}"
                     ) from exc
+            if kind == "design":
+                return fmuid.design(fmu, spec, experiments[0], progress=progress, executor=executor)
             return fmuid.profile(fmu, experiments, spec, progress=progress, executor=executor)
     return fmuid.diagnose(fmu, experiments, spec, progress=progress)
 
@@ -189,7 +194,13 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
             fmu, data = stage_inputs(store, job, Path(tmp))
             _log_fmi_version(fmu)
             spec = spec_from_json(job.spec, "spec")
-            experiments = [load_experiment(path) for path in data]
+            experiments: list[Any] = []
+            if job.kind == "design":
+                from fmuid.design import load_space
+
+                experiments.append(load_space(data[0]))
+            else:
+                experiments.extend(load_experiment(path) for path in data)
             result = run_engine(job.kind, fmu, experiments, spec, progress, dask)
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fmuid.fit.problem import Problem
-from fmuid.profile.checks import diverse_starts, jumps, refit_from
+from fmuid.profile.checks import basins, diverse_starts, jumps, refit_from
 from fmuid.profile.ends import End, locate
 from fmuid.profile.points import WalkPoint
 from fmuid.profile.result import ProfileQuality
@@ -67,7 +67,9 @@ def settle_branch(
     (:func:`fmuid.profile.ends.locate`). At each end and at each jump of the profile the
     other parameters are re-fitted from the other ``valleys`` of the fit check and, where the
     profile is non-parabolic, jumps, has another parameter on a bound, or ``thorough`` is set,
-    from diverse seeded starts. A lower chi2 there means the walk followed a higher valley:
+    from diverse starts: seeded Latin-hypercube points at the first such site, and at later
+    sites the distinct basins those starts reached (:func:`fmuid.profile.checks.basins`),
+    moved to the site. A lower chi2 there means the walk followed a higher valley:
     the stretch towards the estimate is re-walked from the lower valley, the walk goes on
     outwards from it, and the ends are located again.
 
@@ -109,6 +111,8 @@ def settle_branch(
     )  # fmt: skip
     counts = _Counts()
     ends: dict[str, End] = {}
+    known: list[WalkPoint] = []
+    fresh = True
     checks = options.checks
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
@@ -127,16 +131,26 @@ def settle_branch(
         counts.jumps = max(counts.jumps, sum(1 for _, _, why in sites if why == "jump"))
         lower = None
         for site, diverse, _ in sites:
-            starts = list(valleys)
+            others: list[np.ndarray] = []
             if diverse:
-                starts += list(diverse_starts(problem, checks.end_starts, (seed, index, round_)))
-            if not starts:
+                others = (
+                    list(diverse_starts(problem, checks.end_starts, (seed, index, round_)))
+                    if fresh
+                    else [p.z for p in known]
+                )
+                fresh = False
+            if not valleys and not others:
                 continue
             c0 = problem.simulations
-            found = refit_from(problem, index, float(site.z[index]), starts, checks.refit)
+            zi = float(site.z[index])
+            from_valleys = refit_from(problem, index, zi, list(valleys), checks.refit)
+            from_others = refit_from(problem, index, zi, others, checks.refit)
+            if others:
+                known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
+            found = from_valleys + from_others
             counts.check_sims += problem.simulations - c0
             counts.checks += 1
-            counts.starts += len(starts)
+            counts.starts += len(valleys) + len(others)
             if not found:
                 continue
             best = min(found, key=lambda p: p.chi2)

@@ -104,6 +104,25 @@ def distinct_valleys(
     return kept[1:]
 
 
+def basins(
+    problem: Problem, found: Sequence[WalkPoint], seen: Sequence[WalkPoint], keep: int
+) -> list[WalkPoint]:
+    """Return the lowest ``keep`` re-fits of ``found`` in basins other than ``seen`` or each other.
+
+    Two re-fits share a basin when no parameter differs by more than 1e-3 of its range. A
+    check's diverse starts end in such basins; the checks further in along the same branch
+    start from them (cheaper than new diverse starts, and they follow the same valleys).
+    """
+    span = problem.z_upper - problem.z_lower
+    kept: list[WalkPoint] = []
+    for p in sorted(found, key=lambda q: q.chi2):
+        if len(kept) < keep and all(
+            np.max(np.abs(p.z - q.z) / span) > 1e-3 for q in [*seen, *kept]
+        ):
+            kept.append(p)
+    return kept
+
+
 def jumps(side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float) -> list[int]:
     """Positions in ``side`` where the profile jumps, drops or bends unexpectedly.
 

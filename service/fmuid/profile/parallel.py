@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from fmuid.fit.problem import Problem
-from fmuid.model.simulator import register_fmu_copy
+from fmuid.model.simulator import get_simulator, mark_reset_unreliable, register_fmu_copy
 from fmuid.profile.branch import BranchResult, settle_branch
 from fmuid.profile.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 from fmuid.profile.walk import WalkOptions
@@ -73,10 +73,15 @@ def run_branch(task: BranchTask) -> BranchResult:
     return task.walk(on_point)
 
 
-def _init_worker(progress_queue: Any, owner: int) -> None:
-    """Set up a pool worker: it dies with its parent (``PR_SET_PDEATHSIG``) and reports points."""
+def _init_worker(progress_queue: Any, owner: int, problem: Problem, unreliable: bool) -> None:
+    """Set up a pool worker: die with the parent, report points, know the reset verdict.
+
+    Forkserver workers do not inherit the owner's verdict on the FMU's reset: it is passed.
+    """
     global _PROGRESS_QUEUE
     die_with_pool_owner(owner)
+    if unreliable:
+        mark_reset_unreliable(problem.fmu_path, problem.spec.interface)
     _PROGRESS_QUEUE = progress_queue
 
 
@@ -121,12 +126,17 @@ def run_branches(
         return out
     # forkserver, not fork: this process may have threads (BLAS, a job's watchdog); the server
     # dies with this process, and its workers with it (see fmuid.profile.pool_guard)
+    problem = tasks[0].problem
+    unreliable = get_simulator(problem.fmu_path, problem.spec.interface).reset_reliable is False
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["fmuid.profile.forkserver_guard", __name__])
     os.environ[POOL_PARENT_ENV] = str(os.getpid())
     progress_queue = ctx.Queue()
     with ProcessPoolExecutor(
-        n, mp_context=ctx, initializer=_init_worker, initargs=(progress_queue, os.getpid())
+        n,
+        mp_context=ctx,
+        initializer=_init_worker,
+        initargs=(progress_queue, os.getpid(), problem, unreliable),
     ) as pool:
         futures: list[Future[BranchResult]] = [pool.submit(run_branch, t) for t in tasks]
         pending = set(futures)
@@ -156,8 +166,11 @@ def _run_dask(
     # the FMU's bytes travel with each task, not scattered: a task whose worker dies is run
     # again elsewhere, while scattered data lost with its worker cancels the tasks that need it
     fmu_blob = Path(problem.fmu_path).read_bytes()
+    unreliable = get_simulator(problem.fmu_path, problem.spec.interface).reset_reliable is False
     futures = [
-        client.submit(run_branch_anywhere, t, problem.model.sha256, fmu_blob, pure=False)
+        client.submit(
+            run_branch_anywhere, t, problem.model.sha256, fmu_blob, unreliable, pure=False
+        )
         for t in tasks
     ]
     index = {f.key: k for k, f in enumerate(futures)}
@@ -171,8 +184,14 @@ def _run_dask(
     return [r for r in results if r is not None]
 
 
-def run_branch_anywhere(task: BranchTask, sha256: str, fmu_bytes: bytes) -> BranchResult:
-    """Walk a branch on a worker that may not see the FMU file: use a local copy if needed."""
+def run_branch_anywhere(
+    task: BranchTask, sha256: str, fmu_bytes: bytes, reset_unreliable: bool = False
+) -> BranchResult:
+    """Walk a branch on a worker that may not see the FMU file: use a local copy if needed.
+
+    ``reset_unreliable`` carries the submitting process's verdict on the FMU's reset (its
+    workers do not inherit it, as forked local workers do).
+    """
     path = Path(task.problem.fmu_path)
     if _file_sha256(path) != sha256:
         local = Path(tempfile.gettempdir()) / "fmuid-fmus" / sha256 / path.name
@@ -182,6 +201,8 @@ def run_branch_anywhere(task: BranchTask, sha256: str, fmu_bytes: bytes) -> Bran
             tmp.write_bytes(fmu_bytes)
             tmp.replace(local)
         register_fmu_copy(path, local)
+    if reset_unreliable:
+        mark_reset_unreliable(path, task.problem.spec.interface)
     return run_branch(task)
 
 

@@ -41,11 +41,17 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
 def create_job(
     kind: Annotated[Kind, Form(description="What to compute.")],
     spec: Annotated[str, Form(description="The study specification (JSON text).")],
-    data: Annotated[list[UploadFile], File(description="CSV files, one per experiment.")],
+    data: Annotated[
+        list[UploadFile] | None, File(description="CSV files, one per experiment.")
+    ] = None,
+    *,
     store: Annotated[JobStore, Depends(get_store)],
     settings: Annotated[Settings, Depends(get_settings)],
     supervisor: Annotated[Supervisor, Depends(get_supervisor)],
     checks: Annotated[StoreHealth, Depends(get_store_health)],
+    space: Annotated[
+        UploadFile | None, File(description="Experiment space JSON (kind 'design' only).")
+    ] = None,
     fmu: Annotated[UploadFile | None, File(description="An FMI 2.0 co-simulation FMU.")] = None,
     model: Annotated[
         str | None, Form(description="Name of a built-in FMU, instead of 'fmu'.")
@@ -65,10 +71,11 @@ def create_job(
             store,
             kind,
             spec,
-            [Upload(d.filename, d.file) for d in data],
+            [Upload(d.filename, d.file) for d in data or []],
             Upload(fmu.filename, fmu.file) if fmu is not None else None,
             model or None,
             settings.max_fmu_unpacked_bytes,
+            space=Upload(space.filename, space.file) if space is not None else None,
         )
     except SubmissionError as exc:
         raise HTTPException(status_code=exc.status_code, detail=str(exc)) from exc

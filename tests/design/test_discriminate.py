@@ -1,0 +1,104 @@
+"""Model discrimination: a sensor lag versus an input delay on the msd model."""
+
+import json
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from fmuid.data import ParameterSpec, experiment_from_arrays, spec_from_json
+from fmuid.design import space_from_json
+from fmuid.design.discriminate import Hypothesis, default_space, discriminating_experiment
+from fmuid.design.report import discrimination_figure
+from fmuid.fit.optimize import fit_problem
+from fmuid.fit.problem import Problem
+from fmuid.model.builtin import builtin_fmu
+
+TAU = 0.3
+SPACE = {
+    "input": "f",
+    "families": {"step": {"amplitude": [0.3, 1.0], "time": [1.0, 1.0]}},
+    "duration": 6.0, "rates_hz": [5, 10],
+    "outputs": {"x": {"sigma": 0.005}, "v": {"sigma": 0.01}},
+    "base_outputs": ["x"], "max_sensors": 2, "longest_test": 6.0, "candidates": 3,
+}  # fmt: skip
+SPEC = {
+    "parameters": {
+        "m": {"start": 1.1, "lower": 0.1, "upper": 10},
+        "k": {"start": 4.4, "lower": 0.1, "upper": 40},
+        "b": {"start": 1.6, "lower": 0.1, "upper": 10},
+    },
+    "inputs": ["f"], "outputs": {"x": {"sigma": 0.005}}, "global_search": False,
+}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def proposal():
+    spec, space = spec_from_json(json.dumps(SPEC)), space_from_json(json.dumps(SPACE))
+    truth = {n: p.start for n, p in spec.parameters.items()}
+    added = ParameterSpec(start=0.1, lower=0.005, upper=1.0)
+    lag = Hypothesis(
+        "sensor_lag", {**spec.parameters, "tau_sensor": added}, {**truth, "tau_sensor": TAU},
+        {"tau_sensor": ("sensor_lag", None)},
+    )  # fmt: skip
+    delay = Hypothesis(
+        "input_delay", {**spec.parameters, "delay_f": added}, {**truth, "delay_f": TAU},
+        {"delay_f": ("input_delay", "f")},
+    )  # fmt: skip
+    return spec, space, lag, delay, discriminating_experiment("msd", spec, space, lag, delay)
+
+
+def test_proposal_measures_both_sensors_at_full_amplitude(proposal):
+    _, _, _, _, found = proposal
+    # the separation grows with the amplitude (squared), the rate and the sensors
+    assert found.trial.outputs == ("x", "v")
+    assert found.trial.rate_hz == 10
+    assert found.trial.settings["amplitude"] > 0.7
+    assert found.expected_chi2 > 20
+    doc = found.to_dict()
+    assert doc["hypotheses"] == ["sensor_lag", "input_delay"]
+    assert doc["expected_p_value"] < 1e-3
+    fig = discrimination_figure(found)
+    assert len(fig.axes) == 3
+
+
+@pytest.mark.slow
+def test_predicted_separation_is_confirmed_on_simulated_data(proposal):
+    """LRT p < 1e-3 (chi2 with 1 df of chi2_wrong - chi2_right) in >= 90 % of 20 draws each."""
+    spec, space, lag, delay, found = proposal
+    fmu = builtin_fmu("msd")
+    for truth, other in ((lag, delay), (delay, lag)):
+        template = truth.problem(fmu, spec, space, found.trial)
+        clean = template.predict(truth.values)[0]
+        mask = template.masks[0][0]
+        hits = 0
+        for draw in range(20):
+            rng = np.random.default_rng(draw)
+            data = {
+                o: clean[o][mask] + rng.normal(0, space.outputs[o].sigma, int(mask.sum()))
+                for o in found.trial.outputs
+            }
+            right = fit_problem(
+                truth.problem(fmu, spec, space, found.trial, data),
+                start=truth.values,
+                global_search=False,
+            )
+            wrong = fit_problem(
+                other.problem(fmu, spec, space, found.trial, data),
+                start=other.values,
+                global_search=False,
+            )
+            hits += chi2.sf(wrong.chi2 - right.chi2, 1) < 1e-3
+        assert hits >= 18, (truth.name, hits)
+
+
+def test_default_space_follows_the_study_data():
+    t = np.round(np.arange(0, 8.0001, 0.2), 10)
+    exp = experiment_from_arrays("d.csv", t, {"f": np.where(t > 1, 2.0, 0.0), "x": 0.1 * t})
+    spec = spec_from_json(json.dumps(SPEC))
+    space = default_space(Problem(builtin_fmu("msd"), [exp], spec))
+    assert space.input == "f"
+    assert space.families["step"]["amplitude"] == (-2.0, 2.0)
+    assert space.duration == (8.0, 8.0) and space.longest_test == 8.0
+    assert space.rates_hz == [pytest.approx(5.0)]
+    assert space.outputs["x"].sigma == 0.005
