@@ -1,4 +1,7 @@
-"""Figures of a diagnosis: fit overlay, residuals with the located windows, residual spectrum."""
+"""Figures of a diagnosis: fit overlay, residuals with the located windows, residual spectrum.
+
+They only draw what :func:`fmuid.diagnose.series.diagnosis_series` simulated.
+"""
 
 from __future__ import annotations
 
@@ -9,63 +12,34 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
-from fmuid.diagnose.catalogue import study_catalogue
-from fmuid.diagnose.locate import residual_series
 from fmuid.diagnose.residual_tests import FALSE_ALARM, Series, periodogram
 from fmuid.diagnose.result import Diagnosis
-from fmuid.diagnose.scan import augmented
+from fmuid.diagnose.series import DiagnosisSeries
 from fmuid.fit.problem import Problem
 
 SMOOTH = 5
 """Periodogram ordinates averaged in the spectrum figure (as in the band test)."""
 
 
-def augmented_problem_of(problem: Problem, diagnosis: Diagnosis) -> Problem:
-    """Rebuild the augmented problem of a diagnosis (the base problem if nothing was added).
-
-    Parameters
-    ----------
-    problem
-        The base problem that was diagnosed.
-    diagnosis
-        Its diagnosis; the candidates whose parameters it added are switched on.
-    """
-    if not diagnosis.added_parameters:
-        return problem
-    cands = study_catalogue(problem)
-    added = set(diagnosis.added_parameters)
-    chosen = [c for c in cands if set(c.names) <= added]
-    return augmented(problem, chosen, problem.spec.confidence)
-
-
-def figures(
-    diagnosis: Diagnosis, problem_before: Problem, problem_after: Problem | None = None
-) -> dict[str, Figure]:
+def figures(diagnosis: Diagnosis, series: DiagnosisSeries) -> dict[str, Figure]:
     """Return the diagnosis figures: ``fit``, ``residuals`` and ``spectrum``.
 
     Parameters
     ----------
     diagnosis
         The result of ``fmuid.diagnose``.
-    problem_before
-        The base problem (spec's free parameters).
-    problem_after
-        The augmented problem; rebuilt from the diagnosis when ``None``.
+    series
+        What to draw (:func:`fmuid.diagnose.series.diagnosis_series`); nothing is simulated here.
 
     Returns
     -------
     dict of str to matplotlib.figure.Figure
         One row per output, one column per experiment in each figure.
     """
-    after = problem_after or augmented_problem_of(problem_before, diagnosis)
-    before_values = {n: diagnosis.parameters_before[n] for n in problem_before.names}
-    after_values = {n: diagnosis.parameters_after[n] for n in after.names}
-    series_before = residual_series(problem_before, before_values)
-    series_after = residual_series(after, after_values)
     return {
-        "fit": _fit_figure(problem_before, after, before_values, after_values),
-        "residuals": _residual_figure(diagnosis, series_before, series_after),
-        "spectrum": _spectrum_figure(diagnosis, series_before, series_after),
+        "fit": _fit_figure(series),
+        "residuals": _residual_figure(diagnosis, series.residuals_before, series.residuals_after),
+        "spectrum": _spectrum_figure(diagnosis, series.residuals_before, series.residuals_after),
     }
 
 
@@ -76,12 +50,10 @@ def _grid(problem: Problem) -> tuple[Figure, np.ndarray]:
     return fig, axes
 
 
-def _fit_figure(
-    before: Problem, after: Problem, before_values: dict[str, float], after_values: dict[str, float]
-) -> Figure:
+def _fit_figure(series: DiagnosisSeries) -> Figure:
+    before = series.problem
     fig, axes = _grid(before)
-    y_before = before.predict(before_values)
-    y_after = after.predict(after_values)
+    y_before, y_after = series.before, series.after
     units = before.units()
     for i, exp in enumerate(before.experiments):
         for j, output in enumerate(before.outputs):
