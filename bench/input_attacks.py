@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -183,13 +184,40 @@ def cases(msd: Path, workdir: Path, variables: int) -> dict[str, Callable[[str],
     }
 
 
+OLD_CELL = r"\s*(?:[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)?\s*"
+"""The number-cell pattern before the fix (it backtracks quadratically), for the first table."""
+
+
+def cell_table() -> None:
+    """Print the time of one bad number cell under the old and the current pattern."""
+    from fmuid.data.experiment import _CELL
+
+    print(f"{'cell digits':>11} {'old pattern s':>14} {'new pattern s':>14}")
+    old = re.compile(OLD_CELL)
+    for digits in (1000, 8000, 100_000):
+        cell = "1" * digits + "x"
+        times = {}
+        for label, pattern in (("old", old), ("new", _CELL)):
+            if label == "old" and digits > 8000:  # the old pattern would take minutes
+                times[label] = float("nan")
+                continue
+            start = time.perf_counter()
+            assert pattern.fullmatch(cell) is None
+            times[label] = time.perf_counter() - start
+        print(f"{digits:>11} {times['old']:>14.4f} {times['new']:>14.6f}")
+
+
 def main() -> None:
-    """Run the attacks and print the table."""
+    """Run the attacks and print the tables."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", default="", help="comma-separated names (default: all)")
     parser.add_argument("--variables", type=int, default=1_000_000)
+    parser.add_argument("--cells", action="store_true", help="first time the cell patterns")
     args = parser.parse_args()
     from fmuid.model.builtin import builtin_fmu
+
+    if args.cells:
+        cell_table()
 
     with tempfile.TemporaryDirectory(prefix="fmuid-attacks-") as tmp:
         workdir = Path(tmp)

@@ -14,6 +14,7 @@ from fmuid.api.auth import BearerAuth
 from fmuid.api.limits import BodyLimit
 from fmuid.api.openapi import document_errors, validation_error
 from fmuid.api.routers import health, jobs, reports
+from fmuid.api.vetting import VettingPool
 from fmuid.jobs.store import JobStore
 from fmuid.jobs.worker import Supervisor
 from fmuid.settings import Settings
@@ -45,12 +46,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
     store = JobStore(settings.database, settings.data_dir)
     supervisor = Supervisor(settings, store)
+    vetting = VettingPool(
+        settings.check_workers,
+        settings.check_memory_mb,
+        settings.check_timeout_s,
+        settings.check_wait_s,
+    )
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         supervisor.start()
         logger.info("fmuid service: data in %s, %d worker(s)", settings.data_dir, settings.workers)
         yield
+        vetting.close()
         supervisor.stop()
 
     app = FastAPI(
@@ -62,6 +70,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.store = store
     app.state.supervisor = supervisor
+    app.state.vetting = vetting
     for router in (health.router, jobs.router, reports.router):
         app.include_router(router)
 

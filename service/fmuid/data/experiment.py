@@ -235,9 +235,9 @@ def _read_records(name: str, text: str, limits: InputLimits) -> tuple[list[str],
                 what = over_limit("columns", "max_csv_columns", limits)
                 raise DataError(f"{name}: row {len(records)}: {what}")
             if max(map(len, record), default=0) > limits.max_cell_chars:
-                column = max(range(len(record)), key=lambda i: len(record[i])) + 1
+                widest = max(range(len(record)), key=lambda i: len(record[i])) + 1
                 what = over_limit("characters in a cell", "max_cell_chars", limits)
-                raise DataError(f"{name}: row {len(records)}, column {column}: {what}")
+                raise DataError(f"{name}: row {len(records)}, column {widest}: {what}")
             if not _is_blank(record):
                 n_data += 1
                 if n_data > limits.max_csv_rows + 1:

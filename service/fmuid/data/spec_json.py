@@ -97,8 +97,10 @@ def spec_from_json(text: str, source: str = "spec", limits: InputLimits | None =
         data = dict(pairs)
         if len(data) < len(pairs):
             seen: set[str] = set()
-            twice = next(key for key, _ in pairs if key in seen or seen.add(key))
-            raise SpecError(f"{source}: key '{twice}' appears twice in one object")
+            for key, _ in pairs:
+                if key in seen:
+                    raise SpecError(f"{source}: key '{key}' appears twice in one object")
+                seen.add(key)
         return data
 
     try:

@@ -6,9 +6,10 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, File, Form, HTTPException, Query, Response, UploadFile
 
-from fmuid.api.deps import get_job, get_settings, get_store, get_supervisor
+from fmuid.api.deps import get_job, get_pool, get_settings, get_store, get_supervisor
 from fmuid.api.schemas import ErrorOut, JobCreated, JobList, JobOut, Kind
 from fmuid.api.submission import SubmissionError, Upload, submit
+from fmuid.api.vetting import PoolBusy, VettingPool
 from fmuid.jobs.store import FINAL_STATUSES, Job, JobStore
 from fmuid.jobs.worker import Supervisor
 from fmuid.settings import Settings
@@ -30,35 +31,49 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
     responses={
         401: _ERRORS[401],
         413: {"model": ErrorOut, "description": "The request body exceeds the upload limit."},
-        422: {"description": "Bad FMU, CSV or spec, or they do not fit together."},
-        503: {"model": ErrorOut, "description": "The named built-in model is not built."},
+        422: {
+            "description": "Bad FMU, CSV or spec, or they do not fit together, or one is over a"
+            " limit (the reason names it and its FMUID_* setting)."
+        },
+        503: {
+            "model": ErrorOut,
+            "description": "The named built-in model is not built, or every checking process"
+            " stayed busy for FMUID_CHECK_WAIT_S.",
+        },
     },
 )
-def create_job(
+async def create_job(
     kind: Annotated[Kind, Form(description="What to compute.")],
     spec: Annotated[str, Form(description="The study specification (JSON text).")],
     data: Annotated[list[UploadFile], File(description="CSV files, one per experiment.")],
     store: Annotated[JobStore, Depends(get_store)],
     settings: Annotated[Settings, Depends(get_settings)],
     supervisor: Annotated[Supervisor, Depends(get_supervisor)],
-    fmu: Annotated[UploadFile | None, File(description="An FMI 2.0 co-simulation FMU.")] = None,
+    pool: Annotated[VettingPool, Depends(get_pool)],
+    fmu: Annotated[
+        UploadFile | None, File(description="An FMI 2.0/3.0 FMU (co-simulation or model exchange).")
+    ] = None,
     model: Annotated[
         str | None, Form(description="Name of a built-in FMU, instead of 'fmu'.")
     ] = None,
 ) -> JobCreated:
-    """Check the inputs and queue a job; its id comes back at once (202)."""
+    """Check the inputs (in a checking process) and queue a job; its id comes back (202)."""
     try:
-        job = submit(
+        job = await pool.run(
+            submit,
             store,
+            pool,
+            settings,
             kind,
             spec,
             [Upload(d.filename, d.file) for d in data],
             Upload(fmu.filename, fmu.file) if fmu is not None else None,
             model or None,
-            settings.max_fmu_unpacked_bytes,
         )
     except SubmissionError as exc:
         raise HTTPException(status_code=exc.status_code, detail=str(exc)) from exc
+    except PoolBusy as exc:
+        raise HTTPException(status_code=503, detail=str(exc)) from exc
     supervisor.wake()
     return JobCreated(id=job.id)
 
