@@ -166,22 +166,31 @@ def post_job(
     return httpx.post(url + "/v1/jobs", data=form, files=files, timeout=timeout)
 
 
-def cases(msd: Path, workdir: Path, variables: int) -> dict[str, Callable[[str], httpx.Response]]:
-    """Every attack by name, as a function of the service URL."""
+Attack = tuple[str, bytes, Path | None]
+"""A submission: spec text, CSV content, FMU file (None: the built-in msd)."""
+
+
+def make_attack(name: str, msd: Path, workdir: Path, variables: int) -> Attack:
+    """Build the inputs of one attack by name (before the clock starts)."""
     spec = json.dumps(MSD_SPEC)
-    return {
-        "redos-1000": lambda url: post_job(url, spec, redos_csv(1000)),
-        "redos-8000": lambda url: post_job(url, spec, redos_csv(8000)),
-        "columns-20k": lambda url: post_job(url, spec, wide_csv(20_000)),
-        "keys-20k": lambda url: post_job(url, many_keys_spec(20_000), GOOD_CSV),
-        "nesting-100k": lambda url: post_job(url, deep_spec(100_000), GOOD_CSV),
-        "corrupt-zip": lambda url: post_job(
-            url, spec, GOOD_CSV, corrupt_member(msd, workdir / "corrupt.fmu")
-        ),
-        "fmu-1M": lambda url: post_job(
-            url, spec, GOOD_CSV, big_model_description(msd, workdir / "big.fmu", variables)
+    makers: dict[str, Callable[[], Attack]] = {
+        "redos-1000": lambda: (spec, redos_csv(1000), None),
+        "redos-8000": lambda: (spec, redos_csv(8000), None),
+        "columns-20k": lambda: (spec, wide_csv(20_000), None),
+        "keys-20k": lambda: (many_keys_spec(20_000), GOOD_CSV, None),
+        "nesting-100k": lambda: (deep_spec(100_000), GOOD_CSV, None),
+        "corrupt-zip": lambda: (spec, GOOD_CSV, corrupt_member(msd, workdir / "corrupt.fmu")),
+        "fmu-1M": lambda: (
+            spec,
+            GOOD_CSV,
+            big_model_description(msd, workdir / "big.fmu", variables),
         ),
     }
+    return makers[name]()
+
+
+ATTACKS = ("redos-1000", "redos-8000", "columns-20k", "keys-20k", "nesting-100k", "corrupt-zip",
+           "fmu-1M")  # fmt: skip
 
 
 OLD_CELL = r"\s*(?:[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)?\s*"
@@ -221,16 +230,16 @@ def main() -> None:
 
     with tempfile.TemporaryDirectory(prefix="fmuid-attacks-") as tmp:
         workdir = Path(tmp)
-        attacks = cases(builtin_fmu("msd"), workdir, args.variables)
-        chosen = args.cases.split(",") if args.cases else list(attacks)
+        chosen = args.cases.split(",") if args.cases else ATTACKS
         proc, url = start_service(workdir)
         try:
             print(f"{'attack':<14} {'status':>6} {'answer s':>9} {'worst health s':>15}  reason")
             for name in chosen:
+                spec, csv, fmu = make_attack(name, builtin_fmu("msd"), workdir, args.variables)
                 with HealthWatch(url) as watch:
                     start = time.perf_counter()
                     try:
-                        response = attacks[name](url)
+                        response = post_job(url, spec, csv, fmu)
                         status, reason = response.status_code, response.text[:70]
                     except httpx.TimeoutException:
                         status, reason = 0, "no answer within the client timeout"

@@ -5,7 +5,8 @@ The service (:mod:`fmuid.api.vetting`) keeps a few of these processes and sends 
 ``{"ok": true, "model_name": ...}`` or ``{"ok": false, "status": 422, "detail": ...}``. Every
 parse of uploaded bytes (spec, CSV files, ``modelDescription.xml``) and the probe of the FMU's
 binary happen here, never in the service, so that no upload can stall the service's other
-requests. The process limits its own address space and, per task, its CPU time; it leads its own
+requests. The process lowers its CPU priority, limits its own address space and, per task, its
+CPU time; it leads its own
 session, so that the service can kill it and everything it started at once; and it ends when
 its parent does.
 """
@@ -30,6 +31,8 @@ from fmuid.model.fmu import FmuModel
 
 logger = logging.getLogger(__name__)
 
+NICENESS = 10
+"""Checking processes yield the CPU to the service (health, polls) and to the jobs."""
 RECYCLE_RSS_MB = 400
 """A checking process that holds more than this after a task exits (the service starts anew)."""
 
@@ -127,6 +130,7 @@ def _watch_parent(parent: int) -> None:
 
 def main(argv: list[str]) -> int:
     """Answer tasks from stdin until it closes (or the parent dies, or memory piles up)."""
+    os.nice(NICENESS)
     memory = int(argv[1]) * 1024 * 1024
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))

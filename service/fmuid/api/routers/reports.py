@@ -22,6 +22,8 @@ from fmuid.settings import Settings
 router = APIRouter(prefix="/v1/jobs", tags=["reports"])
 
 _FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
+MAX_FILE_NAME = 255
+"""Longest file name the file system takes; a longer one is simply not in the report."""
 _RESPONSES: dict[int | str, dict[str, Any]] = {
     401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
     404: {"model": ErrorOut, "description": "No such job or file."},
@@ -78,6 +80,6 @@ def get_report_file(
     """Give one file of a job's report (an image the page links)."""
     directory = _report_dir(job, settings)
     path = directory / file_name
-    if not _FILE_NAME.fullmatch(file_name) or not path.is_file():
-        raise HTTPException(status_code=404, detail=f"no file {file_name!r} in the report")
+    if len(file_name) > MAX_FILE_NAME or not _FILE_NAME.fullmatch(file_name) or not path.is_file():
+        raise HTTPException(status_code=404, detail=f"no file {file_name[:80]!r} in the report")
     return FileResponse(path)
