@@ -12,7 +12,7 @@ from fastapi.exceptions import RequestValidationError
 
 from fmuid.api.auth import BearerAuth
 from fmuid.api.limits import BodyLimit
-from fmuid.api.openapi import document_errors, validation_error
+from fmuid.api.openapi import answer_options, document_errors, serve_docs, validation_error
 from fmuid.api.routers import health, jobs, reports
 from fmuid.api.vetting import VettingPool
 from fmuid.jobs.store import JobStore
@@ -66,16 +66,20 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         version="0.1.0",
         description=DESCRIPTION,
         lifespan=lifespan,
+        docs_url=None,
+        redoc_url=None,
     )
     app.state.settings = settings
     app.state.store = store
     app.state.supervisor = supervisor
     app.state.vetting = vetting
     for router in (health.router, jobs.router, reports.router):
+        answer_options(router)
         app.include_router(router)
 
     app.add_exception_handler(RequestValidationError, validation_error)
     document_errors(app, secured=settings.api_token is not None)
+    serve_docs(app)
 
     app.add_middleware(BodyLimit, limit=settings.max_upload_bytes)
     if settings.api_token:  # added last, so it runs first: no body is read without the token

@@ -29,6 +29,7 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
     status_code=202,
     response_model=JobCreated,
     responses={
+        400: {"model": ErrorOut, "description": "The multipart body cannot be parsed."},
         401: _ERRORS[401],
         413: {"model": ErrorOut, "description": "The request body exceeds the upload limit."},
         422: {

@@ -2,7 +2,8 @@
 
 The job process writes the report (``<data_dir>/reports/<id>/index.html`` and PNGs) right after
 the result; here it is only served. The page gets ``<base href="report/">`` so that its relative
-image links resolve under ``/v1/jobs/{id}/report/``.
+image links resolve under ``/v1/jobs/{id}/report/``; with ``FMUID_API_TOKEN`` set, each such link
+carries a signature that opens that file in a browser (:func:`fmuid.api.auth.sign`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException
 from fastapi.responses import FileResponse, HTMLResponse
 
+from fmuid.api.auth import sign
 from fmuid.api.deps import get_job, get_settings
 from fmuid.api.schemas import ErrorOut
 from fmuid.jobs.store import Job
@@ -22,6 +24,8 @@ from fmuid.settings import Settings
 router = APIRouter(prefix="/v1/jobs", tags=["reports"])
 
 _FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
+_LINK = re.compile(r'\b(src|href)="([A-Za-z0-9_][A-Za-z0-9_.-]*)"')
+"""A link to a file beside the page (which gets a signature when a token is set)."""
 MAX_FILE_NAME = 255
 """Longest file name the file system takes; a longer one is simply not in the report."""
 _RESPONSES: dict[int | str, dict[str, Any]] = {
@@ -61,6 +65,11 @@ def get_report(
     base = '<base href="report/">'
     head = re.search(r"<head[^>]*>", html, flags=re.IGNORECASE)
     html = html[: head.end()] + base + html[head.end() :] if head else base + html
+    if settings.api_token:
+        prefix = f"/v1/jobs/{job.id}/report/"
+        html = _LINK.sub(
+            lambda m: f'{m[1]}="{m[2]}?sig={sign(settings.api_token or "", prefix + m[2])}"', html
+        )
     return HTMLResponse(html)
 
 
