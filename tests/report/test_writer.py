@@ -1,4 +1,5 @@
 import html
+import dataclasses
 import re
 from html.parser import HTMLParser
 
@@ -99,3 +100,13 @@ def test_diagnosis_report_escapes_text(tmp_path):
     page = _parse(path)
     assert [r[0] for r in page.tables["summary"][1:]] == ["C_atf", "C_atr"]
     assert re.search(r"0\.1, \+\u221e", text)
+
+
+def test_dollar_signs_in_names_are_plain_text(tmp_path):
+    odd = "m$^$"  # mathtext cannot parse this
+    result = toy_profile_result()
+    parameters = {odd: dataclasses.replace(result.parameters["m"], name=odd)}
+    result = dataclasses.replace(result, parameters={**parameters, "k": result.parameters["k"]})
+    page = _parse(write_report(result, tmp_path / "r"))
+    assert len(page.images) == 1 + len(result.parameters)
+    assert odd in [row[0] for row in page.tables["summary"][1:]]
