@@ -14,6 +14,9 @@ import httpx
 import pytest
 from api_helpers import Service, free_port, msd_spec
 
+from fmuid.api.results import FitResultOut, ProfileResultOut
+from plots.toy import toy_profile_result
+
 TOKEN = "s3cret"
 BEARER = {"Authorization": f"Bearer {TOKEN}"}
 
@@ -96,3 +99,25 @@ def test_over_long_report_file_name_is_404(secured, done_job):
     response = httpx.get(f"{secured.url}/v1/jobs/{done_job}/report/{'a' * 300}.png", headers=BEARER)
     assert response.status_code == 404
     assert "no file" in response.json()["detail"]
+
+
+def test_results_and_spec_are_typed_in_the_schema(secured, done_job):
+    schema = httpx.get(secured.url + "/openapi.json").json()
+    result = schema["paths"]["/v1/jobs/{job_id}/result"]["get"]["responses"]["200"]
+    refs = {
+        r["$ref"].rsplit("/", 1)[-1]
+        for r in result["content"]["application/json"]["schema"]["anyOf"]
+    }
+    assert refs == {"FitResultOut", "ProfileResultOut", "DiagnosisOut", "DesignResultOut"}
+    form = schema["components"]["schemas"]["Body_create_job_v1_jobs_post"]["properties"]
+    assert form["spec"]["contentSchema"] == {"$ref": "#/components/schemas/Spec"}
+    assert {"parameters", "outputs"} <= set(schema["components"]["schemas"]["Spec"]["properties"])
+    fit = httpx.get(f"{secured.url}/v1/jobs/{done_job}/result", headers=BEARER).json()
+    assert FitResultOut.model_validate(fit).parameters["k"].estimate == pytest.approx(4.4, rel=0.05)
+
+
+def test_profile_model_reads_a_profile_result():
+    result = toy_profile_result()
+    typed = ProfileResultOut.model_validate(result.to_dict())
+    assert set(typed.parameters) == set(result.parameters)
+    assert typed.parameters["m"].ci.simultaneous == list(result.parameters["m"].ci_simultaneous)

@@ -26,6 +26,7 @@ from starlette.responses import Response
 
 from fmuid.api.auth import OPEN_PATHS
 from fmuid.api.schemas import ErrorOut
+from fmuid.data import Spec
 
 _ERROR_REF = {"$ref": "#/components/schemas/ErrorOut"}
 _FRAMEWORK_SCHEMAS = ("HTTPValidationError", "ValidationError")
@@ -63,6 +64,7 @@ def document_errors(app: FastAPI, secured: bool) -> None:
             schemas["ErrorOut"] = ErrorOut.model_json_schema()
             for name in _FRAMEWORK_SCHEMAS:
                 schemas.pop(name, None)
+            _type_spec_field(schema)
             if secured:
                 components["securitySchemes"] = {"bearer": {"type": "http", "scheme": "bearer"}}
             for path, operations in schema["paths"].items():
@@ -98,6 +100,20 @@ def serve_docs(app: FastAPI) -> None:
             swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
             swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
         )
+
+
+def _type_spec_field(schema: dict[str, Any]) -> None:
+    """Declare the ``spec`` form field of ``POST /v1/jobs`` as JSON text holding a ``Spec``."""
+    schemas = schema["components"]["schemas"]
+    spec = Spec.model_json_schema(ref_template="#/components/schemas/{model}")
+    for name, sub in spec.pop("$defs", {}).items():
+        schemas.setdefault(name, sub)
+    schemas["Spec"] = spec
+    body = schema["paths"]["/v1/jobs"]["post"]["requestBody"]["content"]["multipart/form-data"]
+    form = schemas[body["schema"]["$ref"].rsplit("/", 1)[-1]]
+    form["properties"]["spec"].update(
+        contentMediaType="application/json", contentSchema={"$ref": "#/components/schemas/Spec"}
+    )
 
 
 def answer_options(router: APIRouter) -> None:

@@ -7,6 +7,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, File, Form, HTTPException, Query, Response, UploadFile
 
 from fmuid.api.deps import get_job, get_pool, get_settings, get_store, get_supervisor
+from fmuid.api.results import ResultOut
 from fmuid.api.schemas import ErrorOut, JobCreated, JobList, JobOut, Kind
 from fmuid.api.submission import SubmissionError, Upload, submit
 from fmuid.api.vetting import PoolBusy, VettingPool
@@ -99,10 +100,7 @@ def get_job_status(job: Annotated[Job, Depends(get_job)]) -> JobOut:
     "/{job_id}/result",
     responses={
         **_ERRORS,
-        200: {
-            "description": "The result JSON of the job's kind.",
-            "content": {"application/json": {"schema": {"type": "object"}}},
-        },
+        200: {"model": ResultOut, "description": "The result JSON of the job's kind."},
         409: {"model": ErrorOut, "description": "The job is not done."},
     },
 )
