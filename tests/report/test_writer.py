@@ -1,5 +1,5 @@
-import html
 import dataclasses
+import html
 import re
 from html.parser import HTMLParser
 
