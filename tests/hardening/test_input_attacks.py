@@ -37,6 +37,8 @@ from input_attacks import (  # noqa: E402
     wide_csv,
 )
 
+pytestmark = pytest.mark.slow
+
 HEALTH_S = 0.1
 PROBE_TIMEOUT_S = 2
 FORKED_NAME = "fmuidforked"

@@ -17,6 +17,8 @@ from api_helpers import Service, free_port, msd_spec
 from fmuid.api.results import FitResultOut, ProfileResultOut
 from plots.toy import toy_profile_result
 
+pytestmark = pytest.mark.slow
+
 TOKEN = "s3cret"
 BEARER = {"Authorization": f"Bearer {TOKEN}"}
 
