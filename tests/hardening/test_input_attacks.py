@@ -173,3 +173,40 @@ def test_good_submission_after_the_attacks(attacked, tmp_path):
     csv = msd_csv(tmp_path / "step.csv")
     job = client.submit("fit", SPEC, [csv], model="msd")
     assert client.wait(job, timeout=300)["status"] == "done"
+
+
+def processes_of(data_dir: Path) -> list[str]:
+    """Processes started for the service whose data folder is ``data_dir`` (by environment)."""
+    marker = f"FMUID_DATA_DIR={data_dir}".encode()
+    found = []
+    for environ in Path("/proc").glob("[0-9]*/environ"):
+        try:
+            if marker in environ.read_bytes().split(b"\0"):
+                found.append(environ.parent.name)
+        except OSError:
+            pass
+    return found
+
+
+def test_checks_are_bounded_in_number_and_time(service_factory, msd_file, step_csv, tmp_path):
+    service = service_factory(
+        FMUID_CHECK_WORKERS="1",
+        FMUID_CHECK_WAIT_S="1",
+        FMUID_CHECK_TIMEOUT_S="2",
+        FMUID_PROBE_TIMEOUT_S="60",
+    )
+    client = service.client()
+    warm = client.submit("fit", SPEC, [step_csv], model="msd")
+    fmu = hooked_fmu(msd_file, tmp_path / "sleeper.fmu", fork=False)
+    with ThreadPoolExecutor(2) as pool:
+        responses = list(pool.map(lambda _: post_job(service.url, SPEC, GOOD_CSV, fmu), range(2)))
+    by_status = {r.status_code: r.json()["detail"] for r in responses}
+    assert set(by_status) == {422, 503}, by_status
+    assert "took longer than 2 s (FMUID_CHECK_TIMEOUT_S)" in by_status[422]
+    assert "(FMUID_CHECK_WAIT_S)" in by_status[503]
+    assert client.wait(warm, timeout=300)["status"] == "done"
+    service.kill()
+    deadline = time.monotonic() + 5
+    while processes_of(service.data_dir) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert processes_of(service.data_dir) == []

@@ -1,6 +1,7 @@
 """A few long-lived processes that check submissions, so that no upload stalls the service.
 
-Each process runs :mod:`fmuid.jobs.vet` (started on first use, restarted after it ends), leads
+Each process runs :mod:`fmuid.jobs.vet` (started on first use, restarted after it ends; the
+check's time counts from its first line, written once its imports are done), leads
 its own session and checks one submission at a time. :meth:`VettingPool.run` lets at most
 ``size`` submissions in at once; the others wait without holding a thread, and after
 ``wait_s`` get 503. A check that outlasts ``timeout_s`` has its process killed together with
@@ -25,11 +26,14 @@ from typing import Any, TypeVar
 import anyio
 import anyio.to_thread
 
-from fmuid.jobs.vet import VetTask
+from fmuid.jobs.vet import READY, VetTask
 
 logger = logging.getLogger(__name__)
 
 T = TypeVar("T")
+
+START_TIMEOUT_S = 120.0
+"""Longest start of a checking process (its imports), not counted in the check's time."""
 
 
 class PoolBusy(Exception):
@@ -46,6 +50,12 @@ class _Checker:
             stdout=subprocess.PIPE,
             start_new_session=True,
         )
+
+    def wait_ready(self, timeout: float) -> bool:
+        """Wait for the process's first line, which it writes once its imports are done."""
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        return bool(ready) and self.proc.stdout.readline().decode().strip() == READY
 
     def alive(self) -> bool:
         return self.proc.poll() is None
@@ -151,6 +161,12 @@ class VettingPool:
                 checker = None
             if checker is None:
                 checker = self._start()
+                if not checker.wait_ready(START_TIMEOUT_S):
+                    self._forget(checker)
+                    checker.kill()
+                    checker = None
+                    detail = f"no checking process started within {START_TIMEOUT_S:g} s"
+                    return {"ok": False, "status": 503, "detail": detail}
             answer = checker.ask(task, self.timeout_s)
             if answer is not None:
                 return answer

@@ -31,6 +31,8 @@ from fmuid.model.fmu import FmuModel
 
 logger = logging.getLogger(__name__)
 
+READY = '{"ready": true}'
+"""The first line a checking process writes, once it has imported everything."""
 NICENESS = 10
 """Checking processes yield the CPU to the service (health, polls) and to the jobs."""
 RECYCLE_RSS_MB = 400
@@ -137,6 +139,8 @@ def main(argv: list[str]) -> int:
     answers = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever else writes to stdout (native code) goes to the log
     threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
+    answers.write(READY + "\n")
+    answers.flush()
     for line in sys.stdin:
         answer = _answer(VetTask(**json.loads(line)))
         recycle = answer.pop("recycle", False) or _resident_mb() > RECYCLE_RSS_MB
