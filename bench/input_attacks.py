@@ -121,8 +121,11 @@ def start_service(data_dir: Path, **env: str) -> tuple[subprocess.Popen[bytes], 
     raise RuntimeError("service did not start")
 
 
-def _poll_health(url: str, period: float, stop: Any, results: Any) -> None:
-    """Poll health until ``stop`` is set; put the slowest answer's time and the failures."""
+def _poll_health(url: str, period: float, started: Any, stop: Any, results: Any) -> None:
+    """Poll health until ``stop`` is set; put the slowest answer's time and the failures.
+
+    ``started`` is set after the first answer, so that the watch covers the whole attack.
+    """
     worst = 0.0
     failures: list[str] = []
     with httpx.Client(timeout=30) as client:
@@ -135,6 +138,7 @@ def _poll_health(url: str, period: float, stop: Any, results: Any) -> None:
             except httpx.TransportError as exc:
                 failures.append(f"health failed: {exc!r}")
             worst = max(worst, time.perf_counter() - start)
+            started.set()
             stop.wait(period)
     results.put((worst, failures))
 
@@ -149,16 +153,21 @@ class HealthWatch:
 
     def __init__(self, url: str, period: float = 0.01):
         context = multiprocessing.get_context("spawn")
+        self._started = context.Event()
         self._stop = context.Event()
         self._results: Any = context.Queue()
         self._process = context.Process(
-            target=_poll_health, args=(url, period, self._stop, self._results), daemon=True
+            target=_poll_health,
+            args=(url, period, self._started, self._stop, self._results),
+            daemon=True,
         )
         self.worst = 0.0
         self.failures: list[str] = []
 
     def __enter__(self) -> HealthWatch:
         self._process.start()
+        if not self._started.wait(60):
+            raise RuntimeError("the health poller did not get a first answer within 60 s")
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -26,7 +26,7 @@ from typing import Any, TypeVar
 import anyio
 import anyio.to_thread
 
-from fmuid.jobs.vet import READY, VetTask
+from fmuid.jobs.vet import COMMAND, READY, VetTask
 
 logger = logging.getLogger(__name__)
 
@@ -45,7 +45,7 @@ class _Checker:
 
     def __init__(self, memory_mb: int):
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "fmuid.jobs.vet", str(memory_mb)],
+            [sys.executable, "-c", COMMAND, str(memory_mb)],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             start_new_session=True,

@@ -34,7 +34,13 @@ logger = logging.getLogger(__name__)
 READY = '{"ready": true}'
 """The first line a checking process writes, once it has imported everything."""
 NICENESS = 10
-"""Checking processes yield the CPU to the service (health, polls) and to the jobs."""
+"""Checking processes yield the CPU to the service (health, polls) and to the jobs; the
+service lowers the priority before the imports (:data:`COMMAND`)."""
+COMMAND = (
+    f"import os, runpy; os.nice({NICENESS});"
+    " runpy.run_module('fmuid.jobs.vet', run_name='__main__', alter_sys=True)"
+)
+"""``python -c COMMAND MEMORY_MB`` starts a checking process at low priority."""
 RECYCLE_RSS_MB = 400
 """A checking process that holds more than this after a task exits (the service starts anew)."""
 
@@ -132,7 +138,6 @@ def _watch_parent(parent: int) -> None:
 
 def main(argv: list[str]) -> int:
     """Answer tasks from stdin until it closes (or the parent dies, or memory piles up)."""
-    os.nice(NICENESS)
     memory = int(argv[1]) * 1024 * 1024
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
