@@ -1,11 +1,13 @@
 """Median wall time of one run per FMU kind: the built-in tractor (fmuid Simulator vs
-fmpy.simulate_fmu) and the Reference-FMUs in ../shared/reference-fmus (FMI 2.0/3.0,
-co-simulation/model exchange), when that folder exists."""
+fmpy.simulate_fmu, and hosted as an FMU with an unreliable reset: a fresh instance per run in a
+simulation process replaced every 50 runs) and the Reference-FMUs in ../shared/reference-fmus
+(FMI 2.0/3.0, co-simulation/model exchange), when that folder exists."""
 
 from __future__ import annotations
 
 import os
 import statistics
+import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -14,9 +16,11 @@ import fmpy
 import numpy as np
 
 from fmuid.model.builtin import builtin_fmu
+from fmuid.model.host import HostedSimulator
 from fmuid.model.simulator import Simulator
 
 RUNS = 200
+HOSTED_RECYCLE = 50
 INPUT_TIME = np.array([0.0, 1.0, 1.5, 10.0])
 DELTA = np.array([0.0, 0.0, 0.17452, 0.17452])
 OUTPUT_TIME = np.round(np.arange(51) * 0.2, 10)
@@ -69,11 +73,24 @@ def tractor_rows() -> list[tuple[str, str, float]]:
             input=signal, output=OUTPUTS,
         )  # fmt: skip
 
+    hosted = HostedSimulator(path, runs_per_process=HOSTED_RECYCLE)
+
+    def fresh() -> object:
+        return hosted.simulate({}, INPUT_TIME, {"delta": DELTA}, OUTPUT_TIME, OUTPUTS)
+
     rows = [
         ("tractor_implement (fmuid Simulator)", sim.input_handling, median_seconds(ours, RUNS)),
         ("tractor_implement (fmpy.simulate_fmu)", "fmpy", median_seconds(plain, RUNS)),
-    ]
+        (f"tractor_implement (HostedSimulator, {HOSTED_RECYCLE} runs/process)",
+         hosted.instances, median_seconds(fresh, RUNS)),
+    ]  # fmt: skip
+    start = time.perf_counter()
+    for _ in range(RUNS):
+        fresh()
+    mean = (time.perf_counter() - start) / RUNS
+    rows.append(("  the same, mean over 200 runs with the process forks", "", mean))
     sim.close()
+    hosted.close()
     return rows
 
 
@@ -97,14 +114,34 @@ def foreign_rows(runs: int) -> list[tuple[str, str, float]]:
     return rows
 
 
+def pythonfmu_rows(runs: int) -> list[tuple[str, str, float]]:
+    """The pythonfmu first-order lag of the tests (built here), constant and ramp input."""
+    try:
+        from pythonfmu import FmuBuilder
+    except ImportError:
+        return []
+    source = Path(__file__).resolve().parents[1] / "tests" / "pythonfmu_src" / "first_order.py"
+    with tempfile.TemporaryDirectory() as out:
+        sim = Simulator(FmuBuilder.build_FMU(source, dest=out))
+        rows = []
+        for label, u in (("constant input", np.ones(4)), ("ramp input", DELTA)):
+            seconds = median_seconds(
+                lambda u=u: sim.simulate({}, INPUT_TIME, {"u": u}, OUTPUT_TIME, ["y"]), runs
+            )
+            rows.append((f"pythonfmu FirstOrder, {label} ({sim.model.kind_label})",
+                         sim.input_handling, seconds))  # fmt: skip
+        sim.close()
+    return rows
+
+
 def main() -> None:
     """Print the table."""
-    rows = tractor_rows() + foreign_rows(RUNS // 4)
+    rows = tractor_rows() + foreign_rows(RUNS // 4) + pythonfmu_rows(RUNS // 20)
     print("10 s runs, outputs at 5 Hz (a 1 s ramp input where the FMU has one); median ms")  # noqa: T201
     print(f"{'FMU':<58} {'median ms':>10} {'runs/s':>8}  input handling")  # noqa: T201
     for name, handling, seconds in rows:
         print(f"{name:<58} {seconds * 1e3:>10.3f} {1.0 / seconds:>8.0f}  {handling}")  # noqa: T201
-    if len(rows) == 2:
+    if not any(".fmu" in n for n, _, _ in rows):
         print(f"(no Reference-FMUs in {REFERENCE_DIR})")  # noqa: T201
 
 

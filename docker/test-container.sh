@@ -53,10 +53,10 @@ fi
 # ---- build context: sources + wheels made on the host ---------------------------------------
 CTX=$WORK/context
 rm -rf "$CTX" && mkdir -p "$CTX"
-cp -r "$REPO/pyproject.toml" "$REPO/README.md" "$REPO/service" "$REPO/model_src" "$CTX/"
+cp -r "$REPO/pyproject.toml" "$REPO/README.md" "$REPO/constraints.txt" "$REPO/service" "$REPO/model_src" "$CTX/"
 find "$CTX" -name __pycache__ -prune -exec rm -rf {} +
 log "pip wheel (host) -> $CTX/wheels"
-"$PYTHON" -m pip wheel -q -w "$CTX/wheels" "$CTX" >"$WORK/wheel.log" 2>&1 \
+"$PYTHON" -m pip wheel -q -c "$CTX/constraints.txt" -w "$CTX/wheels" "$CTX[service,dask]" >"$WORK/wheel.log" 2>&1 \
     || { tail -20 "$WORK/wheel.log"; echo "FAILED: pip wheel"; exit 1; }
 
 log "podman build $IMAGE (base $BASE)"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Set up fmuid on a fresh Debian/Ubuntu machine: system packages, a virtual environment with the
-# pinned dependencies, the package itself, and the built-in FMUs (compiled from model_src/).
+# dependencies pinned by constraints.txt, the package itself, and the built-in FMUs (compiled from model_src/).
 #   bash scripts/setup.sh          # what `fmuid demo` and `fmuid serve` need
 #   bash scripts/setup.sh --test   # plus the test tools (headless Chromium for the report test)
 set -euo pipefail
@@ -30,9 +30,10 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
+# Exact versions from constraints.txt; pyproject.toml only states the compatible ranges.
 if [ "$want_test" = 1 ]; then
-    .venv/bin/python -m pip install -q -e '.[dev]'
+    .venv/bin/python -m pip install -q -c constraints.txt -e '.[dev]'
 else
-    .venv/bin/python -m pip install -q -e .
+    .venv/bin/python -m pip install -q -c constraints.txt -e '.[service,dask,report]'
 fi
 .venv/bin/fmuid build-fmus

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from fmuid.model.build import build_fmus
+from fmuid.model.build import build_fmu, build_fmus
 from fmuid.model.builtin import model_src_dir
 
 
@@ -30,3 +30,23 @@ def msd_fmu(built_fmus: dict[str, Path]) -> Path:
 @pytest.fixture(scope="session")
 def msd_parallel_fmu(built_fmus: dict[str, Path]) -> Path:
     return built_fmus["msd_parallel"]
+
+
+@pytest.fixture(scope="session")
+def first_order_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tests/pythonfmu_src/first_order.py`` built by pythonfmu: a second FMI 2.0 exporter."""
+    pythonfmu = pytest.importorskip(
+        "pythonfmu", reason="pythonfmu is not installed (pip install -e '.[dev]')"
+    )
+    if not pythonfmu.FmuBuilder.has_binary():
+        pytest.skip("pythonfmu ships no FMU binary for this platform")
+    source = Path(__file__).parent / "pythonfmu_src" / "first_order.py"
+    out = tmp_path_factory.mktemp("pythonfmu")
+    return Path(pythonfmu.FmuBuilder.build_FMU(source, dest=out))
+
+
+@pytest.fixture(scope="session")
+def leaky_reset_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tests/model/fmus_src/leaky_reset``: msd physics whose reset keeps a growing offset."""
+    source = Path(__file__).parent / "model" / "fmus_src" / "leaky_reset"
+    return build_fmu(model_src_dir(), source, tmp_path_factory.mktemp("leaky"))

@@ -1,4 +1,4 @@
-"""The ``fmuid`` command line (contract: "Command line")."""
+"""The ``fmuid`` console script; its help text is ``_DESCRIPTION``."""
 
 from __future__ import annotations
 
@@ -6,38 +6,29 @@ import argparse
 import json
 import logging
 import sys
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from fmuid import __version__
+from fmuid.console import (
+    EXIT_INTERRUPTED,
+    ProgressDisplay,
+    exit_on_interrupt,
+    log_handler,
+    profile_table,
+)
 from fmuid.errors import DataError, FmuError, SpecError
-from fmuid.progress import Progress
 
 log = logging.getLogger("fmuid")
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 
-
-class _ProgressPrinter:
-    """Progress on stderr: one rewritten line on a terminal, throttled log lines otherwise."""
-
-    def __init__(self) -> None:
-        self.tty = sys.stderr.isatty()
-        self.last = 0.0
-
-    def __call__(self, event: Progress) -> None:
-        now = time.monotonic()
-        final = event.done >= event.total
-        if not final and now - self.last < (0.1 if self.tty else 2.0):
-            return
-        self.last = now
-        text = f"{event.stage}: {event.done}/{event.total} {event.detail}"
-        if self.tty:
-            sys.stderr.write("\r\033[K" + text + ("\n" if final else ""))
-            sys.stderr.flush()
-        else:
-            log.info("%s", text)
+_DESCRIPTION = (
+    "Which FMU parameters can your measurements pin down, and why do model and data disagree? "
+    "Fit, profile likelihoods and diagnosis of FMI 2.0/3.0 FMUs; built-in models: "
+    "tractor_implement, msd, msd_parallel."
+)
 
 
 def _write_json(path: Path, payload: dict[str, Any]) -> None:
@@ -51,11 +42,16 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
     from fmuid.data import load_experiment, load_spec
 
     fmu = _fmu_path(args.fmu)
-    experiments = [load_experiment(Path(p)) for p in args.data]
+    experiments = [load_experiment(p) for p in args.data]
     names = [e.name for e in experiments]
     if len(set(names)) != len(names):
         raise DataError(f"two data files share a name ({', '.join(names)}); rename one")
-    return fmu, experiments, load_spec(Path(args.spec))
+    spec = load_spec(Path(args.spec))
+    if args.interface:
+        spec = spec.model_copy(update={"interface": args.interface})
+    from fmuid.formats.cli import apply_start
+
+    return fmu, experiments, apply_start(spec, args.start)
 
 
 def _fmu_path(text: str) -> Path:
@@ -75,28 +71,74 @@ def _cmd_build(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_info(args: argparse.Namespace) -> int:
+    from fmuid.console import info_text
+    from fmuid.model.info import info
+
+    described = info(args.model)
+    text = json.dumps(described.to_dict(), indent=2) if args.json else info_text(described)
+    print(text)  # noqa: T201
+    return EXIT_OK
+
+
+def _simulation_values(path: Path) -> dict[str, float | str]:
+    """Parameter values of a spec for ``simulate``: ``fixed`` and each parameter's ``start``.
+
+    A spec that only fixes values (no ``parameters`` or ``outputs``) is accepted here.
+    """
+    from fmuid.data import load_spec
+
+    try:
+        raw = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise SpecError(f"{path}: cannot read the spec ({exc})") from exc
+    if isinstance(raw, dict) and "parameters" in raw and "outputs" in raw:
+        spec = load_spec(path)
+        return {**spec.fixed, **{n: p.start for n, p in spec.parameters.items()}}
+    if not isinstance(raw, dict) or not isinstance(raw.get("fixed", {}), dict):
+        raise SpecError(f"{path}: expected an object with 'fixed' (and optional 'parameters')")
+    values: dict[str, float | str] = {}
+    for name, value in raw.get("fixed", {}).items():
+        if not isinstance(value, int | float | str):
+            raise SpecError(f"{path}: fixed.{name}: a number, true/false or text, not {value!r}")
+        values[name] = value
+    for name, p in raw.get("parameters", {}).items():
+        if not isinstance(p, dict) or not isinstance(p.get("start"), int | float):
+            raise SpecError(f"{path}: parameters.{name}.start: a number is required")
+        values[name] = float(p["start"])
+    return values
+
+
+def _spec_interface(path: Path) -> str:
+    """Return the ``interface`` of the spec at ``path`` (default ``auto``), checked."""
+    interface = json.loads(path.read_text()).get("interface", "auto")
+    if interface not in ("auto", "co_simulation", "model_exchange"):
+        raise SpecError(
+            f"{path}: interface: {interface!r} is not one of 'auto', 'co_simulation' or "
+            "'model_exchange'"
+        )
+    return str(interface)
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from fmuid.data import load_experiment, load_spec
+    from fmuid.data import load_experiment
     from fmuid.fit.predictor import merged_inputs
     from fmuid.model.fmu import USABLE, FmuModel
     from fmuid.model.simulator import Simulator
 
     fmu = _fmu_path(args.fmu)
-    model = FmuModel(fmu)
-    experiment = load_experiment(Path(args.data))
-    params: dict[str, float | str] = {}
-    if args.spec:
-        spec = load_spec(Path(args.spec))
-        params.update(spec.fixed)
-        params.update({n: p.start for n, p in spec.parameters.items()})
-        unknown = sorted(set(params) - set(model.parameters))
-        if unknown:
-            raise SpecError(f"{args.spec}: the FMU has no parameter(s) {', '.join(unknown)}")
-        problems = model.usage_problems(spec.parameters, spec.fixed, (), ())
-        if problems:
-            raise SpecError("\n".join(f"{args.spec}: {problem}" for problem in problems))
+    experiment = load_experiment(args.data)
+    params = _simulation_values(Path(args.spec)) if args.spec else {}
+    interface = args.interface or (_spec_interface(Path(args.spec)) if args.spec else "auto")
+    model = FmuModel(fmu, interface)
+    unknown = sorted(set(params) - set(model.parameters))
+    if unknown:
+        raise SpecError(f"{args.spec}: the FMU has no parameter(s) {', '.join(unknown)}")
+    problems = model.usage_problems((), params, (), ())
+    if problems:
+        raise SpecError("\n".join(f"{args.spec}: {problem}" for problem in problems))
     unknown_cols = [
         c
         for c in experiment.columns
@@ -115,22 +157,39 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if not outputs:
         types = ", ".join(f"{n} ({v.type_label})" for n, v in model.outputs.items()) or "none"
         raise FmuError(f"{fmu}: no output fmuid can read (its outputs: {types})")
-    y = Simulator(fmu).simulate(params, input_time, input_values, experiment.time, outputs)
+    simulator = Simulator(fmu, interface)
+    y = simulator.simulate(params, input_time, input_values, experiment.time, outputs)
+    log.info("%s; %s", model.kind_label, simulator.input_handling)
+    columns, header = [experiment.time], ["time"]
+    if args.with_inputs:
+        for name in inputs:
+            columns.append(_input_at(experiment.time, input_time, input_values[name], name in held))
+            header.append(name)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    table = np.column_stack([experiment.time, y])
+    table = np.column_stack([*columns, y])
     np.savetxt(
-        out, table, delimiter=",", header=",".join(["time", *outputs]), comments="", fmt="%.12g"
+        out, table, delimiter=",", header=",".join([*header, *outputs]), comments="", fmt="%.12g"
     )
     print(out)  # noqa: T201
     return EXIT_OK
+
+
+def _input_at(time: Any, input_time: Any, values: Any, held: bool) -> Any:
+    """Return an input at ``time`` as the FMU sees it: linear between samples, or held."""
+    import numpy as np
+
+    if held:
+        return values[np.searchsorted(input_time, time, side="right") - 1]
+    return np.interp(time, input_time, values)
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     import fmuid
 
     fmu, experiments, spec = _load_inputs(args)
-    result = fmuid.fit(fmu, experiments, spec, progress=_ProgressPrinter())
+    with ProgressDisplay() as progress:
+        result = fmuid.fit(fmu, experiments, spec, progress=progress)
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, fmu, experiments, spec)
@@ -142,15 +201,12 @@ def _cmd_profile(args: argparse.Namespace) -> int:
     import fmuid
 
     fmu, experiments, spec = _load_inputs(args)
-    result = fmuid.profile(
-        fmu, experiments, spec, workers=args.workers, progress=_ProgressPrinter()
-    )
+    with ProgressDisplay() as progress:
+        result = fmuid.profile(fmu, experiments, spec, workers=args.workers, progress=progress)
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, fmu, experiments, spec)
-    for name, p in result.parameters.items():
-        lo, hi = p.ci_simultaneous
-        print(f"{name:>12s} {p.estimate:12.6g}  [{_fmt(lo)}, {_fmt(hi)}]  {p.status}")  # noqa: T201
+    print(profile_table(result))  # noqa: T201
     return EXIT_OK
 
 
@@ -158,7 +214,8 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.diagnose import diagnose
 
     fmu, experiments, spec = _load_inputs(args)
-    result = diagnose(fmu, experiments, spec, progress=_ProgressPrinter())
+    with ProgressDisplay() as progress:
+        result = diagnose(fmu, experiments, spec, progress=progress)
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, fmu, experiments, spec)
@@ -190,13 +247,19 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _fmt(v: float | None) -> str:
-    return "null" if v is None else f"{v:.6g}"
+def _interface_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--interface",
+        choices=("auto", "co_simulation", "model_exchange"),
+        help="FMI interface of an FMU that has both (default: the spec's, else auto = "
+        "co-simulation)",
+    )
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="fmuid", description=__doc__)
+    parser = argparse.ArgumentParser(prog="fmuid", description=_DESCRIPTION)
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    parser.add_argument("--version", action="version", version=f"fmuid {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("build-fmus", help="compile model_src/ into fmus/")
@@ -204,11 +267,20 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output folder (default: the repository's fmus/)")
     p.set_defaults(func=_cmd_build)
 
+    p = sub.add_parser("info", help="a model's parameters, inputs and outputs")
+    p.add_argument("model", help="FMU file or built-in model name")
+    p.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    p.set_defaults(func=_cmd_info)
+
     p = sub.add_parser("simulate", help="every FMU output at the data's times")
     p.add_argument("--fmu", required=True, help="FMU file or built-in model name")
     p.add_argument("--data", required=True, help="CSV with time and input columns")
-    p.add_argument("--spec", help="spec JSON: parameter values (start and fixed)")
+    p.add_argument("--spec", help="spec JSON: parameter values (start, fixed; fixed alone will do)")
     p.add_argument("--out", required=True, help="output CSV")
+    _interface_option(p)
+    p.add_argument(
+        "--with-inputs", action="store_true", help="write the input columns beside the outputs"
+    )
     p.set_defaults(func=_cmd_simulate)
 
     for name, func, text in (
@@ -222,9 +294,15 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--spec", required=True, help="spec JSON")
         p.add_argument("--out", required=True, help="result JSON")
         p.add_argument("--report", help="write index.html and plots into this folder")
+        p.add_argument("--start", help="SSP parameter-value file (.ssv): start values")
+        _interface_option(p)
         if name == "profile":
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")
         p.set_defaults(func=func)
+
+    from fmuid.formats.cli import add_commands
+
+    add_commands(sub)
 
     p = sub.add_parser("serve", help="run the HTTP service")
     p.add_argument("--host", help="listen address (default: FMUID_HOST, else 127.0.0.1)")
@@ -242,20 +320,26 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``fmuid`` command; return its exit status."""
     args = _parser().parse_args(argv)
+    tty = sys.stderr.isatty()
+    quiet = tty and args.command in ("fit", "profile", "diagnose")
     logging.basicConfig(
-        level=logging.DEBUG if args.verbose else logging.INFO,
-        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
-        stream=sys.stderr,
+        level=logging.DEBUG if args.verbose else logging.WARNING if quiet else logging.INFO,
+        handlers=[log_handler(tty)],
     )
+    if argv is None and args.command != "serve":
+        exit_on_interrupt()  # the console script only: a caller of main() keeps its own handler
     func: Callable[[argparse.Namespace], int] = args.func
     try:
         return func(args)
     except (DataError, SpecError, FmuError) as exc:
         sys.stderr.write(f"fmuid {args.command}: error: {exc}\n")
         return EXIT_BAD_INPUT
+    except BrokenPipeError:
+        sys.stderr.close()  # the reader (e.g. `| head`) is gone: nothing left to say
+        return EXIT_OK
     except KeyboardInterrupt:
         sys.stderr.write("interrupted\n")
-        return EXIT_INTERNAL
+        return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - last resort: exit 1 with the reason, not a traceback
         log.debug("internal failure", exc_info=True)
         sys.stderr.write(f"fmuid {args.command}: internal error: {type(exc).__name__}: {exc}\n")

@@ -12,7 +12,7 @@ from fmuid.fit.optimize import fit_problem
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import FitResult
 from fmuid.model.builtin import resolve_fmu
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import INTERFACES, FmuModel
 from fmuid.model.simulator import get_simulator
 from fmuid.profile.engine import profile_problem
 from fmuid.profile.result import ProfileResult
@@ -32,12 +32,17 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
     """
     fmu = resolve_fmu(fmu)
     model = FmuModel(fmu)
+    wrong_interface = model.interface_problem(spec.interface)
+    if wrong_interface:
+        raise SpecError(f"{spec.source}: interface: {wrong_interface}")
+    if INTERFACES[spec.interface] not in (None, model.interface):
+        model = FmuModel(fmu, spec.interface)
     check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
     free = [*spec.parameters, *(n for p in spec.physics.values() for n in p.parameters)]
     problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
     if problems:
         raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
-    get_simulator(fmu)
+    get_simulator(fmu, spec.interface)
     return Problem(fmu, experiments, spec, model=model)
 
 

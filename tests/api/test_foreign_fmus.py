@@ -55,3 +55,36 @@ def test_profile_of_an_uploaded_foreign_fmu(service, vdp_csv: Path, name: str) -
     np.testing.assert_allclose(remote, local.ci_pointwise, rtol=1e-6)
     if "ME_only" in name:  # CVode solves the exact ODE; the CS build steps with Euler (biased)
         assert remote[0] < 1.3 < remote[1]
+
+
+def test_an_interface_the_fmu_lacks_is_422(service, vdp_csv: Path) -> None:
+    from fmuid.client import ApiError
+
+    fmu = REFERENCE_DIR / "fmi2" / "VanDerPol_ME_only.fmu"
+    if not fmu.is_file():
+        pytest.skip(f"Reference-FMU {fmu} is absent (set FMUID_REFERENCE_FMUS to their folder)")
+    spec = json.dumps({**SPEC, "interface": "co_simulation"})
+    with pytest.raises(ApiError) as error:
+        service.client().submit("profile", spec, [vdp_csv], fmu_path=fmu)
+    assert error.value.status_code == 422
+    assert "interface: the FMU has no co_simulation interface (it has model_exchange)" in str(
+        error.value
+    )
+
+
+def test_spec_interface_over_http(service, vdp_csv: Path) -> None:
+    """A job whose spec asks for model exchange of an FMU that has both interfaces."""
+    both = REFERENCE_DIR / "fmi2" / "VanDerPol.fmu"
+    only_me = REFERENCE_DIR / "fmi2" / "VanDerPol_ME_only.fmu"
+    if not (both.is_file() and only_me.is_file()):
+        pytest.skip(f"Reference-FMUs absent in {REFERENCE_DIR} (set FMUID_REFERENCE_FMUS)")
+    client = service.client()
+    job = client.submit("fit", json.dumps({**SPEC, "interface": "model_exchange"}), [vdp_csv],
+                        fmu_path=both)  # fmt: skip
+    status = client.wait(job, timeout=600)
+    assert status["status"] == "done", status
+    remote = client.result(job)
+    assert remote["fmu"]["interface"] == "ModelExchange"
+    assert "CVode" in remote["fmu"]["input_handling"]
+    local = fmuid.fit(only_me, [load_experiment(vdp_csv)], spec_from_json(json.dumps(SPEC)))
+    assert remote["parameters"]["mu"]["estimate"] == pytest.approx(local.estimates["mu"], rel=1e-9)

@@ -39,7 +39,7 @@ def test_an_extra_mode_is_found_with_its_frequency_and_damping() -> None:
     w0 = 2 * np.pi * f0
     s = complex(-zeta * w0, w0 * np.sqrt(1 - zeta**2))
     z = np.exp(s * dt)
-    a1, a2 = 2 * z.real, -abs(z) ** 2
+    a1, a2 = 2 * z.real, -(abs(z) ** 2)
     rng = np.random.default_rng(3)
     t = np.arange(600) * dt
     u = rng.normal(size=len(t))

@@ -126,3 +126,20 @@ def test_a_steering_lag_and_the_same_lag_on_both_outputs_are_listed_as_a_tie(
     assert other in result["verdict"]
     name = "tau_steer" if other == "steering_lag" else "tau_sensor"
     assert tie["intervals"][name]["excludes_off"] is True
+
+
+@pytest.mark.slow
+def test_a_concealed_effect_outside_the_catalogue_is_flagged_and_left_unexplained(
+    tractor_fmu: Path,
+) -> None:
+    case = ft.make_case("hitch_stiffness", 4000.0, seed=3, rate=5.0)
+    result = diagnose(tractor_fmu, case.experiments, study_spec(), options=DiagnoseOptions(
+        absorbed=False)).to_dict()  # fmt: skip
+    _assert_concealed(tractor_fmu, case, result)
+    assert result["mismatch"] is True
+    assert result["effect"] == "unexplained"
+    assert "generic_error_model" in {e["test"] for e in result["evidence"]}
+    model = result["generic_correction"]["input_error_model"]
+    assert model["p_value"] < 0.01 and model["chi2_drop"] > model["df"]
+    assert result["verdict"].startswith("A mismatch in")
+    assert "no catalogue entry" in result["verdict"]

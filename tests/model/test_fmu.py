@@ -118,7 +118,7 @@ def test_missing_interfaces_are_rejected(msd_fmu: Path, tmp_path: Path) -> None:
 
     me_only = _rewrite(msd_fmu, tmp_path / "me.fmu", edit)
     assert FmuModel(me_only).interface == "ModelExchange"
-    with pytest.raises(FmuError, match="no CoSimulation interface"):
+    with pytest.raises(FmuError, match="no co_simulation interface"):
         FmuModel(me_only, interface="CoSimulation")
 
     def drop(name: str, data: bytes):

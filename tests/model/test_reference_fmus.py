@@ -192,16 +192,6 @@ def test_unreliable_reset_is_detected(monkeypatch: pytest.MonkeyPatch) -> None:
     assert sim._instance.instantiations == before + 1
 
 
-def test_library_is_reloaded_after_many_instances(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("fmuid.model.simulator.RECYCLE_AFTER", 3)
-    sim = _simulator("fmi2", "Dahlquist", CS)
-    sim.reset_reliable = False
-    t = np.linspace(0.0, 1.0, 11)
-    runs = [sim.simulate({"k": 2.0}, t[:1], {}, t, ["x"]) for _ in range(5)]
-    assert all(np.array_equal(r, runs[0]) for r in runs)
-    assert sim._instance.instantiations < 3
-
-
 def test_fmi3_model_exchange_copy(tmp_path: Path) -> None:
     path = model_exchange_only(reference_fmu("fmi3", "VanDerPol"), tmp_path / "vdp_me.fmu")
     assert Simulator(path).model.kind_label == "FMI 3.0 model exchange"

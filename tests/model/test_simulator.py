@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import multiprocessing
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +93,20 @@ def test_get_simulator_caches_per_path(msd_fmu: Path) -> None:
     first = get_simulator(msd_fmu)
     assert get_simulator(str(msd_fmu)) is first
     assert first.model.model_name == "msd"
+
+
+def test_a_forked_child_leaves_the_parents_fmu_files(msd_fmu: Path, msd_parallel_fmu: Path) -> None:
+    """A forked worker drops the simulators it inherits; the parent's extracted FMU stays."""
+    unzip_dir = Path(get_simulator(msd_fmu)._unzip_dir)
+
+    def child() -> None:
+        get_simulator(msd_parallel_fmu)  # a new pid: the inherited cache is dropped
+
+    process = multiprocessing.get_context("fork").Process(target=child)
+    process.start()
+    process.join()
+    assert process.exitcode == 0
+    assert (unzip_dir / "modelDescription.xml").is_file()
 
 
 def test_plan_reuse_sees_arrays_changed_in_place(tractor: Simulator) -> None:

@@ -57,3 +57,29 @@ def test_parameter_paths_draw_each_other_parameter(profile_result):
     # the toy k moves -0.5 decades per decade of m
     assert np.allclose(np.diff(y) / np.diff(x), -0.5)
     assert [t.get_text() for t in ax.get_legend().get_texts()][0] == "k"
+
+
+def test_profile_into_a_given_ax_draws_one_parameter_with_its_unit(profile_result):
+    import dataclasses
+
+    result = dataclasses.replace(
+        profile_result, fit=dataclasses.replace(profile_result.fit, units={"k": "N/m"})
+    )
+    fig = Figure()
+    ax, other = fig.subplots(1, 2)
+    assert profile_figure(result, "k", ax=ax) is fig
+    assert ax.get_xlabel() == "log10(k [N/m])"
+    assert len(_lines(ax, "profile")) == 1
+    assert not other.lines
+    assert parameter_paths_figure(result, "k", ax=other) is fig
+    assert [line.get_gid() for line in other.lines if line.get_gid()] == ["path_m"]
+
+
+def test_profile_into_an_ax_needs_one_parameter(profile_result):
+    import pytest
+
+    ax = Figure().subplots()
+    with pytest.raises(ValueError, match="name"):
+        profile_figure(profile_result, ax=ax)
+    with pytest.raises(KeyError, match="profiled: m, k"):
+        profile_figure(profile_result, "q")

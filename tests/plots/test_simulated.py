@@ -2,7 +2,9 @@ import numpy as np
 
 from fmuid.demo import DESIGNS, NOMINAL, simulate_dataset, study_spec
 from fmuid.fit.result import Cost, FitResult
-from fmuid.plots import fit_figure, residual_series, trajectory_band_figure
+from fmuid.fit.series import residual_series
+from fmuid.plots import fit_figure, trajectory_band_figure
+from fmuid.profile.band import trajectory_band
 from fmuid.profile.result import ParameterProfile, ProfilePoint, ProfileResult
 from fmuid.stages import make_problem
 
@@ -20,7 +22,9 @@ def test_fit_figure_rows_and_residuals_at_the_truth(tractor_fmu):
     pooled = np.concatenate([s.weighted for s in series])
     assert len(pooled) == 102
     assert 0.7 < pooled.std() < 1.3
-    fig = fit_figure(problem, NOMINAL)
+    assert {s.unit for s in series} == {"rad/s"}
+    fig = fit_figure(series)
+    assert fig.axes[0].get_ylabel() == "gam_t [rad/s]"
     assert len(fig.axes) == 2 * 4
     data = [line for line in fig.axes[0].lines if line.get_gid() == "data"]
     assert len(data[0].get_xdata()) == 51
@@ -63,7 +67,9 @@ def _profile_result(problem) -> ProfileResult:
 
 def test_trajectory_band_uses_points_inside_the_ci(tractor_fmu):
     problem = _problem(tractor_fmu)
-    fig = trajectory_band_figure(problem, _profile_result(problem), n=10)
+    band = trajectory_band(problem, _profile_result(problem), n=10)
+    assert band.n_sets == 3
+    fig = trajectory_band_figure(band)
     # two outputs over time plus the CG paths of the one experiment
     assert len([ax for ax in fig.axes if ax.get_visible()]) == 3
     band = [line for line in fig.axes[0].lines if line.get_gid() == "band"]

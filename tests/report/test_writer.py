@@ -61,8 +61,8 @@ def test_profile_report_lists_parameters_and_images_exist(tmp_path):
     rows = page.tables["summary"][1:]
     assert [r[0] for r in rows] == list(result.parameters)
     k = rows[1]
-    assert k[4] == "practically non identifiable"
-    assert k[2].endswith("+\u221e]")
+    assert k[5] == "practically non identifiable"
+    assert k[3].endswith("+\u221e]")
     study = dict((r[0], r[1]) for r in page.tables["study"][1:])
     assert study["threshold simultaneous (chi2 rise)"] == "2.28"
     assert study["sigma x"] == "0.1 (given)"

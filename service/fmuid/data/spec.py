@@ -175,6 +175,9 @@ class Spec(BaseModel):
         Seed of every random choice (non-negative).
     physics
         Switchable physics of the FMU by effect name (for the diagnosis).
+    interface
+        FMI interface to drive when the FMU has both: ``"auto"`` (co-simulation, the
+        exporter's own solver), ``"co_simulation"`` or ``"model_exchange"`` (fmuid's CVode).
 
     """
 
@@ -188,6 +191,7 @@ class Spec(BaseModel):
     global_search: bool = True
     seed: Annotated[int, Field(ge=0)] = 0
     physics: dict[str, PhysicsSpec] = {}
+    interface: Literal["auto", "co_simulation", "model_exchange"] = "auto"
 
     _source: str = PrivateAttr(default="spec")
 

@@ -34,9 +34,7 @@ def _width(ci: tuple[float | None, float | None]) -> float | None:
     return None if lo is None or hi is None else hi - lo
 
 
-def compare(
-    before: ProfileResult, after: ProfileResult, names: list[str]
-) -> dict[str, Any]:
+def compare(before: ProfileResult, after: ProfileResult, names: list[str]) -> dict[str, Any]:
     """Intervals and labels before and after, and whether each parameter absorbs the term."""
     out: dict[str, Any] = {}
     for name in names:

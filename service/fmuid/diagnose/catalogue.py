@@ -133,8 +133,7 @@ def catalogue(
             "sensor_lag",
             (_time_constant("tau_sensor", "time constant of a first-order lag on the outputs"),),
             ("sensor_lag", None),
-            "the measured outputs lag the model by a first-order filter of time constant "
-            "{value} s",
+            "the measured outputs lag the model by a first-order filter of time constant {value} s",
         )
     ]
     for name in inputs:
@@ -148,14 +147,18 @@ def catalogue(
         )  # fmt: skip
         out.append(
             Candidate(
-                "gyro_bias", (bias,), ("gyro_bias", name),
+                "gyro_bias",
+                (bias,),
+                ("gyro_bias", name),
                 f"output {name} is recorded with a constant bias of {{value}} {unit}".rstrip(),
             )  # fmt: skip
         )
     for physics in knowledge.physics:
         out.append(
             Candidate(
-                physics.effect, physics.parameters, None,
+                physics.effect,
+                physics.parameters,
+                None,
                 f"{physics.description} ({physics.parameters[0].name} = {{value}} "
                 f"{physics.parameters[0].unit})".replace(" )", ")"),
             )  # fmt: skip

@@ -1,11 +1,13 @@
 """Decide: is there a mismatch, is a candidate significant, which candidates tie.
 
 **One family, one level.** ``mismatch`` is decided by a weighted Holm procedure (valid under
-any dependence) over three groups of tests at the family-wise false-alarm level fixed in
-advance (1 %): the catalogue scan (weight :data:`SCAN_WEIGHT`), the agreement of separate
-per-experiment fits (:data:`AGREEMENT_WEIGHT`) and the residual tests, which share the rest
-equally. The weights put the false-alarm budget where a concealed effect leaves its evidence
-(the likelihood ratio of the right augmentation); an effect that shows in the residuals leaves
+any dependence) over four groups of tests at the family-wise false-alarm level fixed in
+advance (1 %): the catalogue scan (weight :data:`SCAN_WEIGHT`), the generic error-model test
+(:data:`GENERIC_WEIGHT`, :mod:`.generic`: concealed effects outside the catalogue), the
+agreement of separate per-experiment fits (:data:`AGREEMENT_WEIGHT`) and the residual tests,
+which share the rest equally. The weights put the false-alarm budget where a concealed effect
+leaves its evidence (the likelihood ratio of the right augmentation, or input-driven structure
+that no move of the parameters reproduces); an effect that shows in the residuals leaves
 p-values far below any of these levels.
 
 **The scan's null distribution.** Each candidate's likelihood-ratio statistic has, under the
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from scipy import stats
@@ -37,8 +40,18 @@ from fmuid.diagnose.scan import CandidateFit
 SCAN_WEIGHT = 0.7
 """Share of the family-wise level given to the catalogue scan."""
 
+GENERIC_WEIGHT = 0.1
+"""Share given to the generic error-model test."""
+
 AGREEMENT_WEIGHT = 0.1
 """Share given to the agreement of separate per-experiment fits."""
+
+GROUPS = {
+    "catalogue_scan": SCAN_WEIGHT,
+    "generic_error_model": GENERIC_WEIGHT,
+    "experiments_disagree": AGREEMENT_WEIGHT,
+}
+"""Weight of each test that is not a residual test; the residual tests share the rest."""
 
 TIE_LEVEL = 0.05
 """Vuong's test must reject at this level for one candidate to be preferred over another."""
@@ -51,7 +64,23 @@ NULL_DRAWS = 20000
 """Draws of the Gaussian null of the scan's smallest p-value."""
 
 
-def _null_stats(draws: np.ndarray, fits: Sequence[CandidateFit], blocks: list[slice]) -> np.ndarray:
+class Scored(Protocol):
+    """A test whose statistic is, to first order, a function of ``directions^T e``."""
+
+    @property
+    def directions(self) -> np.ndarray:
+        """Orthonormal score directions (columns)."""
+
+    @property
+    def one_sided(self) -> bool:
+        """Whether the null is chi-bar-square at a bound (one direction only)."""
+
+    @property
+    def p_value(self) -> float:
+        """The test's own p-value."""
+
+
+def _null_stats(draws: np.ndarray, fits: Sequence[Scored], blocks: list[slice]) -> np.ndarray:
     """Each candidate's p-value for every null draw (draws x candidates)."""
     out = np.empty((draws.shape[0], len(fits)))
     for k, (f, block) in enumerate(zip(fits, blocks)):
@@ -67,8 +96,8 @@ def _null_stats(draws: np.ndarray, fits: Sequence[CandidateFit], blocks: list[sl
     return out
 
 
-def min_p_adjusted(fits: Sequence[CandidateFit], seed: int) -> list[float]:
-    """Single-step min-P adjusted p-value of each candidate (see the module docstring)."""
+def min_p(fits: Sequence[Scored], seed: int) -> list[float]:
+    """Single-step min-P adjusted p-value of each test (see the module docstring)."""
     if not fits:
         return []
     blocks, start = [], 0
@@ -90,9 +119,7 @@ def min_p_adjusted(fits: Sequence[CandidateFit], seed: int) -> list[float]:
     return out
 
 
-def weighted_holm(
-    tests: Sequence[tuple[TestResult, float]], alpha: float
-) -> list[TestResult]:
+def weighted_holm(tests: Sequence[tuple[TestResult, float]], alpha: float) -> list[TestResult]:
     """Return the tests that Holm's weighted step-down procedure rejects at level ``alpha``.
 
     Parameters
@@ -116,18 +143,10 @@ def weighted_holm(
 
 
 def family_weights(tests: Sequence[TestResult]) -> list[tuple[TestResult, float]]:
-    """Weights of the decision family: scan, agreement, residual tests (equal shares)."""
-    residual = [t for t in tests if t.test not in ("catalogue_scan", "experiments_disagree")]
-    rest = 1.0 - SCAN_WEIGHT - AGREEMENT_WEIGHT
-    out = []
-    for t in tests:
-        if t.test == "catalogue_scan":
-            out.append((t, SCAN_WEIGHT))
-        elif t.test == "experiments_disagree":
-            out.append((t, AGREEMENT_WEIGHT))
-        else:
-            out.append((t, rest / len(residual)))
-    return out
+    """Weights of the decision family: scan, generic, agreement, residual tests (equal shares)."""
+    residual = [t for t in tests if t.test not in GROUPS]
+    rest = 1.0 - sum(GROUPS.values())
+    return [(t, GROUPS.get(t.test, rest / max(len(residual), 1))) for t in tests]
 
 
 @dataclass(frozen=True)

@@ -34,10 +34,18 @@ from fmuid.diagnose import residual_tests as rt
 from fmuid.diagnose.absorb import absorbed
 from fmuid.diagnose.catalogue import Candidate, study_catalogue
 from fmuid.diagnose.correction import arx_correction
+from fmuid.diagnose.generic import generic_test
 from fmuid.diagnose.knowledge import AddedParameter
 from fmuid.diagnose.result import AddedEstimate, CandidateScore, Diagnosis
 from fmuid.diagnose.scan import CandidateFit, Scanner, augmented, scan
-from fmuid.fit.optimize import FitOptions, fit_problem, jacobian, make_fit_result, refine
+from fmuid.fit.optimize import (
+    FitOptions,
+    fit_problem,
+    jacobian,
+    make_fit_result,
+    refine,
+    safe_residuals,
+)
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import Cost, FitResult
 from fmuid.profile.engine import profile_problem
@@ -152,7 +160,7 @@ class _Run:
             scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
             options=self.opts.fit, stage=stage, on_candidate=seen,
         )  # fmt: skip
-        return fits, decide.min_p_adjusted(fits, self.problem.spec.seed + stage)
+        return fits, decide.min_p(fits, self.problem.spec.seed + stage)
 
     def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
         """Count a profile: its problem's simulations, and those of worker processes."""
@@ -168,7 +176,10 @@ def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
     """Profile-likelihood intervals of an equally good candidate's added parameters."""
     tie_fit = _fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
     prof = profile_problem(
-        tie.problem, tie_fit, only=list(tie.candidate.names), workers=run.opts.workers,
+        tie.problem,
+        tie_fit,
+        only=list(tie.candidate.names),
+        workers=run.opts.workers,
         options=run.opts.walk,
     )
     run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
@@ -179,6 +190,14 @@ def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
         ).to_dict()
         for p in tie.candidate.parameters
     }  # fmt: skip
+
+
+def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestResult]:
+    """Residual tests of an augmented fit and the generic error-model test on top of it."""
+    tests = locate.residual_tests(problem, fit)
+    residuals = safe_residuals(problem, fit.z_estimate())
+    generic, _ = generic_test(problem, residuals, fit.jacobian, seed)
+    return [*tests, generic] if generic else tests
 
 
 def _recheck_base(run: _Run, fit: FitResult, best: CandidateFit) -> FitResult | None:
@@ -244,12 +263,13 @@ def diagnose_problem(
     fit, scanner, fits, adjusted = _scan_base(run, fit, cands)
     tests_before = locate.residual_tests(problem, fit)
     agreement = locate.experiments_disagree(problem, fit, opts.agreement_nfev)
-    run.report("residual tests and the experiments' agreement")
+    generic, pole = generic_test(problem, scanner.r0, fit.jacobian, problem.spec.seed)
+    run.report("residual tests, the experiments' agreement and the generic error model")
     k_best = int(np.argmin(adjusted))
     scan_test = rt.TestResult(
         "catalogue_scan", None, None, adjusted[k_best], fits[k_best].statistic, None
     )
-    family = [*tests_before, *([agreement] if agreement else []), scan_test]
+    family = [*tests_before, *(t for t in (agreement, generic) if t), scan_test]
     # 3. decide
     evidence = decide.weighted_holm(decide.family_weights(family), opts.alpha)
     where, found = locate.location(problem, fit, [t for t in evidence if t.output])
@@ -262,6 +282,7 @@ def diagnose_problem(
         "parameters_before": dict(fit.estimates),
         "fmu": {"sha256": fit.fmu_sha256, "model_name": fit.model_name},
         "scan_p_value": scan_test.p_value,
+        "units": dict(fit.units),
     }  # fmt: skip
     if not evidence:
         return Diagnosis(
@@ -278,7 +299,8 @@ def diagnose_problem(
         best = scanner.fit(best, opts.fit)
     aug, z = best.problem, best.z
     final_fit = _fit_of(aug, z, best.chi2, run.t0)
-    tests_after = locate.residual_tests(aug, final_fit)
+    seed_after = problem.spec.seed + 1
+    tests_after = _tests_after(aug, final_fit, seed_after)
     applied = [best.candidate]
     second: str | None = None
     if significant and rt.holm(tests_after, opts.alpha):
@@ -295,15 +317,24 @@ def diagnose_problem(
                 best, applied, aug, z = alone, [top.candidate], alone.problem, alone.z
                 final_fit = _fit_of(aug, z, alone.chi2, run.t0)
             else:
-                applied, aug, z, second = [best.candidate, top.candidate], top.problem, top.z, (
-                    top.candidate.effect
+                applied, aug, z, second = (
+                    [best.candidate, top.candidate],
+                    top.problem,
+                    top.z,
+                    (top.candidate.effect),
                 )
                 final_fit = _fit_of(aug, z, top.chi2, run.t0)
-            tests_after = locate.residual_tests(aug, final_fit)
+            tests_after = _tests_after(aug, final_fit, seed_after)
     run.report("tests of the augmented model")
     explained = significant and not rt.holm(tests_after, opts.alpha)
     if not explained:
         correction = arx_correction(locate.residual_series(problem, fit.estimates))
+        if generic is not None and pole is not None:
+            correction["input_error_model"] = {
+                "model": f"Laguerre filters of each input (pole {pole.pole_hz:.3g} Hz) per output",
+                "pole_hz": pole.pole_hz, "chi2_drop": generic.statistic, "df": generic.df,
+                "p_value": generic.p_value,
+            }  # fmt: skip
         run.report("generic correction")
         worst = min(tests_after, key=lambda t: t.p_value) if tests_after else None
         return Diagnosis(

@@ -22,9 +22,9 @@ def no_mismatch(alpha: float, scan_p: float | None) -> str:
     """Verdict when no test of the family rejects."""
     scan = "" if scan_p is None else f" (best candidate, adjusted for the scan: p = {scan_p:.2g})"
     return (
-        "No mismatch: neither the residual tests, nor the agreement of the experiments, nor any "
-        f"candidate of the catalogue{scan} rejects the model at a family-wise false-alarm level "
-        f"of {alpha:g}."
+        "No mismatch: neither the residual tests, nor the agreement of the experiments, nor the "
+        f"generic input-driven error model, nor any candidate of the catalogue{scan} rejects the "
+        f"model at a family-wise false-alarm level of {alpha:g}."
     )
 
 
@@ -80,6 +80,13 @@ def unexplained(
     )
     share = correction.get("structure_fraction")
     out += f"; {share:.0%} of the misfit above noise is structure)." if share is not None else ")."
+    model = correction.get("input_error_model")
+    if model:
+        out += (
+            f" An error model driven by the inputs ({model['model']}) lowers chi2 by "
+            f"{model['chi2_drop']:.3g} with {model['df']} coefficients where no move of the "
+            f"model's parameters can ({strength(model['p_value'])})."
+        )
     dynamics = correction.get("dynamics") or {}
     mode = dynamics.get("mode")
     if mode:

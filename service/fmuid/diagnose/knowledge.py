@@ -135,9 +135,12 @@ def model_knowledge(fmu_path: str | Path, spec: Spec) -> ModelKnowledge:
     for effect, entry in spec.physics.items():
         params = tuple(
             AddedParameter(
-                name, p.unit, p.description,
+                name,
+                p.unit,
+                p.description,
                 ParameterSpec(start=p.start, lower=p.lower, upper=p.upper, scale=p.scale),
-                p.off, _side(p.off, p.lower, p.upper, None),
+                p.off,
+                _side(p.off, p.lower, p.upper, None),
             )  # fmt: skip
             for name, p in entry.parameters.items()
         )

@@ -47,9 +47,7 @@ def residual_tests(problem: Problem, fit: FitResult) -> list[rt.TestResult]:
     return tests
 
 
-def experiments_disagree(
-    problem: Problem, fit: FitResult, max_nfev: int
-) -> rt.TestResult | None:
+def experiments_disagree(problem: Problem, fit: FitResult, max_nfev: int) -> rt.TestResult | None:
     """Likelihood-ratio test that every experiment shares the parameters.
 
     Each experiment is fitted alone, warm-started from the joint fit; the joint chi2 minus the

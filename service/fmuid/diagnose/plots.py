@@ -82,6 +82,7 @@ def _fit_figure(
     fig, axes = _grid(before)
     y_before = before.predict(before_values)
     y_after = after.predict(after_values)
+    units = before.units()
     for i, exp in enumerate(before.experiments):
         for j, output in enumerate(before.outputs):
             ax = axes[j, i]
@@ -91,6 +92,8 @@ def _fit_figure(
             ax.plot(exp.time, y_after[i][output], "-", color="tab:blue", label="augmented")
             ax.set_title(f"{exp.name}: {output}", fontsize=9)
             ax.set_xlabel("time [s]")
+            unit = units.get(output)
+            ax.set_ylabel(f"{output} [{unit}]" if unit else output)
     axes[0, 0].legend(fontsize=7)
     fig.suptitle("Fit before and after the augmentation")
     return fig

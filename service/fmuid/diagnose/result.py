@@ -134,6 +134,7 @@ class Diagnosis:
     scan_p_value: float | None = None
     fmu: dict[str, str] = field(default_factory=dict)
     cost: Cost = Cost(0, 0.0)
+    units: dict[str, str] = field(default_factory=dict)
 
     def whiteness(self, after: bool) -> dict[str, float]:
         """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""
@@ -180,8 +181,15 @@ class Diagnosis:
             "tests_after": [t.to_dict() for t in self.tests_after],
             "generic_correction": self.generic_correction,
             "cost": self.cost.to_dict(),
+            "units": dict(self.units),
         }
         return {"verdict": verdict(out), **out}
+
+    def to_frame(self) -> Any:
+        """Return a pandas table of the parameters before and after, and the added ones."""
+        from fmuid.results import to_frame
+
+        return to_frame(self)
 
 
 def verdict(d: dict[str, Any]) -> str:
@@ -192,13 +200,19 @@ def verdict(d: dict[str, Any]) -> str:
     effect = d.get("effect")
     if effect in (None, "unexplained"):
         outputs = ", ".join((d.get("location") or {}).get("outputs") or []) or "the outputs"
-        return f"A mismatch in {outputs} that no catalogue entry explains."
+        hidden = all(
+            e.get("test") in ("generic_error_model", "catalogue_scan", "experiments_disagree")
+            for e in d.get("evidence") or []
+        )
+        note = ", although the base model's residuals look like noise" if hidden else ""
+        return f"A mismatch in {outputs} that no catalogue entry explains{note}."
     p = d.get("lrt_p_value")
     words = "evidence" if p is None else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else
                                           "moderate") + f" evidence (p = {p:.2g})"  # fmt: skip
     evidence = d.get("evidence") or []
     hidden = bool(evidence) and all(
-        e.get("test") in ("catalogue_scan", "experiments_disagree") for e in evidence
+        e.get("test") in ("catalogue_scan", "generic_error_model", "experiments_disagree")
+        for e in evidence
     )
     out = f"{effect} explains the mismatch, with {words}"
     if hidden:

@@ -61,13 +61,20 @@ class FmuPredictor:
         FMU parameter values that are set in every run but not fitted.
     inputs
         Names of the FMU inputs driven from the experiments' columns.
+    interface
+        ``"auto"``, ``"co_simulation"`` or ``"model_exchange"`` (the spec's ``interface``).
 
     """
 
     def __init__(
-        self, fmu_path: str | Path, fixed: Mapping[str, float | str], inputs: Sequence[str]
+        self,
+        fmu_path: str | Path,
+        fixed: Mapping[str, float | str],
+        inputs: Sequence[str],
+        interface: str = "auto",
     ):
         self.fmu_path = str(fmu_path)
+        self.interface = interface
         self.fixed = dict(fixed)
         self.inputs = tuple(inputs)
         self._inputs_cache: dict[int, tuple[Experiment, np.ndarray, dict[str, np.ndarray]]] = {}
@@ -82,7 +89,7 @@ class FmuPredictor:
         """Return the experiment's inputs on their merged sample times (cached)."""
         cached = self._inputs_cache.get(id(experiment))
         if cached is None or cached[0] is not experiment:
-            variables = get_simulator(self.fmu_path).model.inputs
+            variables = get_simulator(self.fmu_path, self.interface).model.inputs
             held = [n for n in self.inputs if n in variables and not variables[n].is_continuous]
             cached = (experiment, *merged_inputs(experiment, self.inputs, held))
             self._inputs_cache[id(experiment)] = cached
@@ -94,6 +101,6 @@ class FmuPredictor:
         """Simulate the FMU and return ``outputs`` at every row of the experiment."""
         input_time, input_values = self.inputs_of(experiment)
         values = {**self.fixed, **params}
-        return get_simulator(self.fmu_path).simulate(
+        return get_simulator(self.fmu_path, self.interface).simulate(
             values, input_time, input_values, experiment.time, list(outputs)
         )

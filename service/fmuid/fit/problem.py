@@ -50,7 +50,7 @@ class Problem:
         model: FmuModel | None = None,
     ):
         self.fmu_path = Path(fmu_path)
-        self.model = model if model is not None else FmuModel(self.fmu_path)
+        self.model = model if model is not None else FmuModel(self.fmu_path, spec.interface)
         self.experiments = list(experiments)
         self.spec = spec
         params = dict(parameters if parameters is not None else spec.parameters)
@@ -69,7 +69,9 @@ class Problem:
             }
         )
         self.inputs = inputs
-        self.predictor: Predictor = predictor or FmuPredictor(self.fmu_path, spec.fixed, inputs)
+        self.predictor: Predictor = predictor or FmuPredictor(
+            self.fmu_path, spec.fixed, inputs, spec.interface
+        )
         self.masks = [
             [
                 exp.output_mask(o) if o in exp.columns else np.zeros(exp.n_rows, bool)
@@ -130,6 +132,13 @@ class Problem:
             n: float(10.0**zi) if s == "log" else float(zi)
             for n, s, zi in zip(self.names, self.scales, z, strict=True)
         }
+
+    def units(self) -> dict[str, str]:
+        """Return the unit of each free and fixed parameter, input and output the FMU declares."""
+        model = self.model
+        declared = {**model.parameters, **model.inputs, **model.outputs}
+        names = [*self.names, *self.spec.fixed, *self.inputs, *self.outputs]
+        return {n: declared[n].unit or "" for n in names if n in declared and declared[n].unit}
 
     def representative_sigma(self) -> dict[str, float]:
         """Return one sigma per output: the median over its fitted samples."""

@@ -57,6 +57,8 @@ class FitResult:
         Simulations and wall time of the fit.
     fmu_info
         How the FMU was run: ``fmi_version``, ``interface`` and ``input_handling``.
+    units
+        Unit of each free and fixed parameter, input and output that declares one in the FMU.
 
     """
 
@@ -77,6 +79,7 @@ class FitResult:
     message: str = ""
     cost: Cost = Cost(0, 0.0)
     fmu_info: dict[str, str] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
 
     def z_estimate(self) -> np.ndarray:
         """Return the estimate in fitted coordinates (log10 for log-scaled parameters)."""
@@ -119,6 +122,7 @@ class FitResult:
                     "lower": float(self.lower[n]),
                     "upper": float(self.upper[n]),
                     "scale": s,
+                    "unit": self.units.get(n, ""),
                     "at_bound": bool(
                         np.isclose(self.estimates[n], self.lower[n], rtol=1e-6)
                         or np.isclose(self.estimates[n], self.upper[n], rtol=1e-6)
@@ -130,4 +134,11 @@ class FitResult:
             "global_search": self.global_search,
             "message": self.message,
             "cost": self.cost.to_dict(),
+            "units": dict(self.units),
         }
+
+    def to_frame(self) -> Any:
+        """Return a pandas table of the estimates, one row per free parameter (needs pandas)."""
+        from fmuid.results import to_frame
+
+        return to_frame(self)

@@ -99,6 +99,9 @@ def vet(task: VetTask) -> dict[str, Any]:
             model = FmuModel(fmu_path)
         else:
             model = check_fmu(fmu_path, task.fmu_name, FmuLimits(**task.fmu_limits))
+        wrong_interface = model.interface_problem(spec.interface)
+        if wrong_interface:
+            return {"ok": False, "status": 422, "detail": f"spec: interface: {wrong_interface}"}
         experiments = [
             load_experiment(workdir / "data" / name, input_limits) for name in task.data_names
         ]

@@ -1,4 +1,9 @@
-"""Where the built-in FMUs (compiled from ``model_src/``) live, building them on first use."""
+"""Where the built-in FMUs (compiled from ``model_src/``) live, building them on first use.
+
+The C sources ship inside the package (``fmuid/model_src``, a link to the repository's
+``model_src/`` in a source tree, package data in a wheel). The FMUs are built next to the
+sources in a source tree (``<repo>/fmus``) and into a user cache folder in an installed package.
+"""
 
 from __future__ import annotations
 
@@ -13,17 +18,42 @@ logger = logging.getLogger(__name__)
 
 BUILTIN_MODELS = ("tractor_implement", "msd", "msd_parallel")
 
+_PACKAGE = Path(__file__).resolve().parents[1]
+
+
+def _repository() -> Path | None:
+    """Return the source tree holding this package, or ``None`` for an installed package."""
+    root = _PACKAGE.parents[1]
+    return root if (root / "pyproject.toml").is_file() and (root / "model_src").is_dir() else None
+
+
+def cache_dir() -> Path:
+    """User cache folder of fmuid: ``$XDG_CACHE_HOME/fmuid``, else ``~/.cache/fmuid``."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "fmuid"
+
 
 def fmu_dir() -> Path:
-    """Folder of the built-in FMUs: ``$FMUID_FMU_DIR``, else ``<repo>/fmus``."""
+    """Folder of the built-in FMUs.
+
+    ``$FMUID_FMU_DIR`` when set; else ``<repo>/fmus`` in a source tree; else
+    ``<user cache>/fmus/<fmuid version>`` (see :func:`cache_dir`).
+    """
     configured = os.environ.get("FMUID_FMU_DIR")
-    return Path(configured) if configured else Path(__file__).resolve().parents[3] / "fmus"
+    if configured:
+        return Path(configured)
+    repo = _repository()
+    if repo is not None:
+        return repo / "fmus"
+    from fmuid import __version__
+
+    return cache_dir() / "fmus" / __version__
 
 
 def model_src_dir() -> Path:
-    """Folder of the C sources: ``$FMUID_MODEL_SRC``, else ``<repo>/model_src``."""
+    """Folder of the C sources: ``$FMUID_MODEL_SRC``, else the package's ``model_src``."""
     configured = os.environ.get("FMUID_MODEL_SRC")
-    return Path(configured) if configured else Path(__file__).resolve().parents[3] / "model_src"
+    return Path(configured) if configured else _PACKAGE / "model_src"
 
 
 def builtin_fmu(name: str) -> Path:
@@ -79,4 +109,3 @@ def resolve_fmu(fmu: str | Path) -> Path:
             f"FMU file not found: {fmu} (nor is it a built-in model: {', '.join(BUILTIN_MODELS)})"
         )
     return path
-

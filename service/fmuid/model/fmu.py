@@ -23,6 +23,18 @@ logger = logging.getLogger(__name__)
 
 CO_SIMULATION = "CoSimulation"
 MODEL_EXCHANGE = "ModelExchange"
+INTERFACES: dict[str | None, str | None] = {
+    None: None,
+    "auto": None,
+    "co_simulation": CO_SIMULATION,
+    "model_exchange": MODEL_EXCHANGE,
+    CO_SIMULATION: CO_SIMULATION,
+    MODEL_EXCHANGE: MODEL_EXCHANGE,
+}
+"""Accepted names of the interface to drive (the spec's spelling and FMI's); auto/None:
+co-simulation when the FMU has it, else model exchange."""
+SPEC_NAMES = {CO_SIMULATION: "co_simulation", MODEL_EXCHANGE: "model_exchange"}
+"""The spec's name of each FMI interface."""
 
 FLOAT_TYPES = frozenset({"Real", "Float64", "Float32"})
 INTEGER_TYPES = frozenset(
@@ -177,8 +189,9 @@ class FmuModel:
     path
         The ``.fmu`` file.
     interface
-        ``"CoSimulation"`` or ``"ModelExchange"``; default: co-simulation when the FMU has it
-        (its own solver, as its exporter tuned it), else model exchange.
+        ``"co_simulation"`` (or ``"CoSimulation"``), ``"model_exchange"`` (or
+        ``"ModelExchange"``), or ``"auto"``/None: co-simulation when the FMU has it (its own
+        solver, as its exporter tuned it), else model exchange.
 
     Attributes
     ----------
@@ -190,6 +203,8 @@ class FmuModel:
         From ``modelDescription.xml`` (``guid`` is the FMI 3.0 ``instantiationToken``).
     interface
         The FMI interface fmuid drives: ``CoSimulation`` or ``ModelExchange``.
+    interfaces
+        The FMI interfaces the FMU has (of those two).
     model_description
         fmpy's parsed model description.
     parameters, inputs, outputs
@@ -220,7 +235,13 @@ class FmuModel:
                 f"{self.path}: cannot read modelDescription.xml (FMI {version}): {exc}"
             ) from exc
         self.model_description: ModelDescription = description
-        self.interface = _choose_interface(self.path, description, interface)
+        self.interfaces = tuple(
+            name
+            for name, part in ((CO_SIMULATION, description.coSimulation),
+                               (MODEL_EXCHANGE, description.modelExchange))
+            if part is not None
+        )  # fmt: skip
+        self.interface = _choose_interface(self.path, self.interfaces, interface)
         self.model_name: str = description.modelName
         self.fmi_version: str = version
         self.guid: str = description.guid or description.instantiationToken or ""
@@ -245,6 +266,14 @@ class FmuModel:
             group = groups.get(v.causality)
             if group is not None:
                 group[v.name] = _variable(v)
+
+    def interface_problem(self, wanted: str) -> str | None:
+        """Say why a study cannot drive the interface ``wanted`` (a spec name), else None."""
+        chosen = INTERFACES.get(wanted, wanted)
+        if chosen is None or chosen in self.interfaces:
+            return None
+        has = " and ".join(SPEC_NAMES[i] for i in self.interfaces)
+        return f'the FMU has no {wanted} interface (it has {has}); use "auto"'
 
     @property
     def is_cosimulation(self) -> bool:
@@ -322,22 +351,24 @@ def _article(word: str) -> str:
     return ("an " if word[0].upper() in "AEIOU" else "a ") + word
 
 
-def _choose_interface(path: Path, description: ModelDescription, wanted: str | None) -> str:
-    available = [
-        name
-        for name, part in ((CO_SIMULATION, description.coSimulation),
-                           (MODEL_EXCHANGE, description.modelExchange))
-        if part is not None
-    ]  # fmt: skip
-    if wanted is not None and wanted not in (CO_SIMULATION, MODEL_EXCHANGE):
-        raise FmuError(f"unknown FMI interface {wanted!r}: use CoSimulation or ModelExchange")
+def _choose_interface(path: Path, available: tuple[str, ...], wanted: str | None) -> str:
+    if wanted not in INTERFACES:
+        raise FmuError(
+            f"unknown FMI interface {wanted!r}: use one of "
+            + ", ".join(repr(k) for k in INTERFACES if k is not None)
+        )
     if not available:
         raise FmuError(
             f"{path}: the FMU has neither a co-simulation nor a model-exchange interface "
             "(scheduled execution is not supported)"
         )
-    if wanted is None:
+    chosen = INTERFACES[wanted]
+    if chosen is None:
         return available[0]
-    if wanted not in available:
-        raise FmuError(f"{path}: the FMU has no {wanted} interface (it has {available[0]})")
-    return wanted
+    if chosen not in available:
+        raise FmuError(
+            f"{path}: the FMU has no {SPEC_NAMES[chosen]} interface "
+            f'(it has {SPEC_NAMES[available[0]]}); use interface "auto" or '
+            f'"{SPEC_NAMES[available[0]]}"'
+        )
+    return chosen

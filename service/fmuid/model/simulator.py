@@ -3,8 +3,10 @@
 One instance per simulator, reset between runs; each run is a deterministic function of the
 parameters and inputs (no state carried over). The first successful run is repeated after a
 reset and compared with the run on the fresh instance: if they differ, the reset is taken as
-unreliable and every later run gets a fresh instance (the library is reloaded every
-:data:`RECYCLE_AFTER` instances, a limit some exporters have).
+unreliable and every later run gets a fresh instance. :func:`get_simulator` then moves the FMU
+into a separate process that is replaced after a set number of runs
+(:class:`fmuid.model.host.HostedSimulator`), since some exporters fail after about a thousand
+instantiations in one process.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import threading
 import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import fmpy
 import numpy as np
@@ -26,9 +28,12 @@ from fmuid.errors import FmuError
 from fmuid.model.channels import Channels
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
-from fmuid.model.fmu import USABLE, FmuModel, Variable
+from fmuid.model.fmu import INTERFACES, USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan, make_plan
+
+if TYPE_CHECKING:
+    from fmuid.model.host import HostedSimulator
 
 logger = logging.getLogger(__name__)
 
@@ -37,21 +42,51 @@ INPUT_STEP = 1e-3
 an input (the linear input is sampled at each sub-step's start)."""
 PLAN_CACHE = 32
 """Run plans kept per simulator (one per experiment of a study, typically)."""
-RECYCLE_AFTER = 500
-"""Instances created before the library is reloaded, when the FMU's reset is unreliable."""
 
 
-class Simulator:
-    """One instance of an FMU, simulated many times with different parameters and inputs.
+class SimulatorBase:
+    """What every simulator of an FMU has: the parsed FMU and how inputs reach it.
 
     Parameters
     ----------
     path
         The ``.fmu`` file.
     interface
-        ``"CoSimulation"`` or ``"ModelExchange"``; default as :class:`FmuModel` chooses.
+        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"``/None (as :class:`FmuModel`).
     input_step
         Longest sub-step [s] for co-simulation FMUs without input derivatives.
+
+    """
+
+    def __init__(
+        self, path: str | Path, interface: str | None = None, input_step: float = INPUT_STEP
+    ) -> None:
+        self.model = FmuModel(path, interface)
+        self.path = self.model.path
+        self.interface = interface
+        self.input_step = float(input_step)
+
+    @property
+    def input_handling(self) -> str:
+        """How inputs reach this FMU between their samples (for results and logs)."""
+        model = self.model
+        if not model.is_cosimulation:
+            return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
+        if model.can_interpolate_inputs:
+            return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
+        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
+
+
+class Simulator(SimulatorBase):
+    """One instance of an FMU, simulated many times with different parameters and inputs.
+
+    Parameters
+    ----------
+    path, interface, input_step
+        As for :class:`SimulatorBase`.
+    reset_reliable
+        False: give every run a fresh instance without checking the reset; None: check it on
+        the first run.
 
     Attributes
     ----------
@@ -68,30 +103,30 @@ class Simulator:
     """
 
     def __init__(
-        self, path: str | Path, interface: str | None = None, input_step: float = INPUT_STEP
+        self,
+        path: str | Path,
+        interface: str | None = None,
+        input_step: float = INPUT_STEP,
+        reset_reliable: bool | None = None,
     ) -> None:
-        self.model = FmuModel(path, interface)
-        self.path = self.model.path
-        self.input_step = float(input_step)
+        super().__init__(path, interface, input_step)
         self._unzip_dir = tempfile.mkdtemp(prefix="fmuid-fmu-")
-        self._cleanup = weakref.finalize(self, shutil.rmtree, self._unzip_dir, ignore_errors=True)
+        self._cleanup = weakref.finalize(self, _remove_tree, self._unzip_dir, os.getpid())
         fmpy.extract(str(self.path), unzipdir=self._unzip_dir)
         self._instance = Instance(self.model, self._unzip_dir)
         self._instance.instantiate()
         self._fresh = True
         self._terminated = False
-        self.reset_reliable: bool | None = None
+        self.reset_reliable = reset_reliable
         self._channels: dict[tuple[str, ...], Channels] = {}
         self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], RunPlan]] = {}
 
     @property
-    def input_handling(self) -> str:
-        """How inputs reach this FMU between their samples (for results and logs)."""
-        if not self.model.is_cosimulation:
-            return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
-        if self.model.can_interpolate_inputs:
-            return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
-        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
+    def instances(self) -> str:
+        """How runs get their FMU instance (for results and logs)."""
+        if self.reset_reliable is False:
+            return "a fresh instance per run (its reset is unreliable)"
+        return "one instance, reset between runs"
 
     def _variables(self, names: Sequence[str], role: str) -> list[Variable]:
         table = {"parameter": self.model.parameters, "input": self.model.inputs,
@@ -250,9 +285,6 @@ class Simulator:
             )
             self.reset_reliable = False
         instance.free()
-        if instance.instantiations >= RECYCLE_AFTER:
-            instance.unload()
-            instance = self._instance = Instance(self.model, self._unzip_dir)
         instance.instantiate()
         return instance
 
@@ -281,9 +313,16 @@ class Simulator:
         self._cleanup()
 
 
-_CACHE: dict[tuple[str, int, int], Simulator] = {}
+def _remove_tree(path: str, owner: int) -> None:
+    """Delete the extracted FMU, unless this is a forked copy of its owner (which still uses it)."""
+    if os.getpid() == owner:
+        shutil.rmtree(path, ignore_errors=True)
+
+
+_CACHE: dict[tuple[str, str | None, int, int], Simulator | HostedSimulator] = {}
 _CACHE_PID = os.getpid()
 _ALIASES: dict[str, Path] = {}
+_UNRELIABLE: set[tuple[str, str | None]] = set()
 
 
 def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
@@ -295,30 +334,41 @@ def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
     _ALIASES[str(path)] = local_copy
 
 
-def fmu_summary(path: str | Path) -> dict[str, str]:
-    """Say how fmuid runs the FMU at ``path``: FMI version, interface and input handling."""
-    simulator = get_simulator(path)
+def mark_reset_unreliable(path: str | Path, interface: str | None = None) -> None:
+    """Record that the FMU's reset is unreliable: :func:`get_simulator` hosts it from now on.
+
+    The record holds in this process and in the worker processes it forks later.
+    """
+    resolved = _ALIASES.get(str(path), Path(path)).resolve()
+    _UNRELIABLE.add((str(resolved), INTERFACES.get(interface, interface)))
+
+
+def fmu_summary(path: str | Path, interface: str | None = None) -> dict[str, str]:
+    """Say how fmuid runs the FMU at ``path``: FMI version, interface, input handling, reset."""
+    simulator = get_simulator(path, interface)
     return {
         "fmi_version": simulator.model.fmi_version,
         "interface": simulator.model.interface,
         "input_handling": simulator.input_handling,
+        "instances": simulator.instances,
     }
 
 
-def get_simulator(path: str | Path) -> Simulator:
-    """Return this thread's :class:`Simulator` for ``path``, creating it on first use.
+def get_simulator(path: str | Path, interface: str | None = None) -> Simulator | HostedSimulator:
+    """Return this thread's simulator for ``path``, creating it on first use.
 
     FMU instances are not thread-safe, so each thread of a process (e.g. a dask worker with
-    several threads) gets its own. The cache key is the resolved path, the file's modification
-    time and the thread, so a rebuilt FMU gets a fresh simulator (the old one is closed). A
-    forked child starts with an empty cache.
+    several threads) gets its own. The cache key is the resolved path, the interface, the
+    file's modification time and the thread, so a rebuilt FMU gets a fresh simulator (the old
+    one is closed). A forked child starts with an empty cache. An FMU whose reset was found
+    unreliable (by the simulator's first run or by :func:`mark_reset_unreliable`) gets a
+    :class:`~fmuid.model.host.HostedSimulator`: a fresh instance per run, in a process replaced
+    every ``FMUID_RECYCLE_RUNS`` runs.
 
-    Parameters
-    ----------
-    path
-        The ``.fmu`` file.
-
+    ``path`` and ``interface`` are as for :class:`SimulatorBase`.
     """
+    from fmuid.model.host import HostedSimulator  # host imports this module
+
     global _CACHE_PID
     if _CACHE_PID != os.getpid():
         _CACHE.clear()
@@ -329,11 +379,19 @@ def get_simulator(path: str | Path) -> Simulator:
     except OSError as exc:
         raise FmuError(f"FMU {path} does not exist") from exc
     thread = threading.get_ident()
-    key = (str(resolved), mtime, thread)
+    wanted = INTERFACES.get(interface, interface)  # FMI's name; None: auto
+    key = (str(resolved), wanted, mtime, thread)
     simulator = _CACHE.get(key)
+    if isinstance(simulator, Simulator) and (
+        simulator.reset_reliable is False or key[:2] in _UNRELIABLE
+    ):
+        mark_reset_unreliable(resolved, wanted)
+        _CACHE.pop(key).close()
+        simulator = None
     if simulator is None:
-        for old_key in [k for k in _CACHE if k[0] == key[0] and k[2] == thread]:
+        for old_key in [k for k in _CACHE if k[:2] == key[:2] and k[3] == thread]:
             _CACHE.pop(old_key).close()
-        simulator = Simulator(resolved)
+        hosted = (str(resolved), wanted) in _UNRELIABLE
+        simulator = (HostedSimulator if hosted else Simulator)(resolved, wanted)
         _CACHE[key] = simulator
     return simulator

@@ -51,6 +51,20 @@ def to_plot_coordinate(value: float, scale: str) -> float:
     return math.log10(value) if scale == "log" else float(value)
 
 
-def axis_label(name: str, scale: str) -> str:
-    """Return the axis label of a parameter in plot coordinates."""
-    return f"log10({name})" if scale == "log" else name
+def axis_label(name: str, scale: str, unit: str = "") -> str:
+    """Return the axis label of a parameter in plot coordinates, with its unit when known."""
+    label = unit_label(name, unit)
+    return f"log10({label})" if scale == "log" else label
+
+
+def unit_label(name: str, unit: str) -> str:
+    """Return an axis label with the unit in brackets when there is one."""
+    return f"{name} [{unit}]" if unit else name
+
+
+def figure_of(ax: Axes) -> Figure:
+    """Return the top-level figure that holds ``ax``."""
+    fig = ax.get_figure(root=True)
+    if not isinstance(fig, Figure):
+        raise ValueError("the axes belong to no figure")
+    return fig

@@ -37,6 +37,8 @@ class CiEntry:
         Bars of one group (e.g. one experiment design) are drawn together under a heading.
     true
         The value that made the data, when known (black line).
+    unit
+        The parameter's unit, shown in the panel title.
 
     """
 
@@ -49,6 +51,7 @@ class CiEntry:
     scale: str = "log"
     group: str = ""
     true: float | None = None
+    unit: str = ""
 
 
 def ci_entries_from_profile(
@@ -92,6 +95,7 @@ def ci_entries_from_profile(
             scale=p.scale,
             group=group,
             true=truth.get(name),
+            unit=result.fit.units.get(name, ""),
         )
         for name, p in result.parameters.items()
     ]
@@ -126,8 +130,9 @@ def ci_compilation_figure(
     params = list(dict.fromkeys(e.parameter for e in entries))
     fig, axes = new_figure(len(params), ncols=ncols, panel_size=(4.2, 0.35 * _rows(entries) + 1.2))
     for ax, name in zip(axes, params, strict=True):
-        _draw_panel(ax, [e for e in entries if e.parameter == name])
-        ax.set_title(name)
+        panel = [e for e in entries if e.parameter == name]
+        _draw_panel(ax, panel)
+        ax.set_title(f"{name} [{panel[0].unit}]" if panel[0].unit else name)
     if title:
         fig.suptitle(title)
     return fig

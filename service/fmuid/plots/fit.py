@@ -2,79 +2,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from collections.abc import Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
 from scipy import stats
 
-from fmuid.fit.result import FitResult
-from fmuid.plots._common import DATA_COLOR, MODEL_COLOR
-
-if TYPE_CHECKING:
-    from fmuid.fit.problem import Problem
+from fmuid.fit.series import ResidualSeries
+from fmuid.plots._common import DATA_COLOR, MODEL_COLOR, unit_label
 
 
-@dataclass(frozen=True)
-class ResidualSeries:
-    """Data, model and weighted residuals of one output in one experiment.
-
-    Attributes
-    ----------
-    experiment, output
-        Names.
-    time
-        Times of the fitted rows [s].
-    data, model
-        Measured and simulated values there.
-    weighted
-        ``(data - model) / sigma``.
-
-    """
-
-    experiment: str
-    output: str
-    time: np.ndarray
-    data: np.ndarray
-    model: np.ndarray
-    weighted: np.ndarray
-
-
-def residual_series(problem: Problem, values: Mapping[str, float]) -> list[ResidualSeries]:
-    """Simulate at ``values`` and pair the model with the data of every fitted output.
-
-    Parameters
-    ----------
-    problem
-        The fitting problem (experiments, sigma, predictions).
-    values
-        Free parameter values (parameter units).
-
-    Returns
-    -------
-    list of ResidualSeries
-        One per experiment and fitted output, in the problem's order.
-
-    """
-    out = []
-    predicted = problem.predict(values)
-    for i, (exp, model) in enumerate(zip(problem.experiments, predicted, strict=True)):
-        for j, output in enumerate(problem.outputs):
-            mask = problem.masks[i][j]
-            if not mask.any():
-                continue
-            data = problem.data[i][j]
-            sim = np.asarray(model[output])[mask]
-            sig = np.asarray(problem.sigma[i][output], dtype=float)[mask]
-            out.append(
-                ResidualSeries(exp.name, output, exp.time[mask], data, sim, (data - sim) / sig)
-            )
-    return out
-
-
-def fit_figure(problem: Problem, fit: FitResult | Mapping[str, Any]) -> Figure:
+def fit_figure(series: Sequence[ResidualSeries]) -> Figure:
     """Draw data against the fitted model and the weighted residuals' diagnostics.
 
     One row per experiment and fitted output with four panels: the time history (data as
@@ -84,19 +22,16 @@ def fit_figure(problem: Problem, fit: FitResult | Mapping[str, Any]) -> Figure:
 
     Parameters
     ----------
-    problem
-        The fitting problem the fit was made on.
-    fit
-        The fit, or a mapping of free parameter values.
+    series
+        Data and model of each experiment and output:
+        ``fmuid.fit.series.residual_series(problem, fit.estimates)``.
 
     Returns
     -------
     Figure
-        ``4 * (experiments x outputs)`` panels.
+        ``4 * len(series)`` panels.
 
     """
-    values = fit.estimates if isinstance(fit, FitResult) else dict(fit)
-    series = residual_series(problem, values)
     fig = Figure(figsize=(14.0, 2.8 * max(1, len(series))), layout="constrained")
     grid = fig.subplots(max(1, len(series)), 4, squeeze=False)
     for row, s in zip(grid, series, strict=False):
@@ -108,7 +43,7 @@ def fit_figure(problem: Problem, fit: FitResult | Mapping[str, Any]) -> Figure:
         )
         ax_t.set_title(f"{s.experiment}: {s.output}", fontsize=9)
         ax_t.set_xlabel("time [s]")
-        ax_t.set_ylabel(s.output)
+        ax_t.set_ylabel(unit_label(s.output, s.unit))
         ax_t.legend(fontsize=7)
         ax_r.axhline(0.0, color="0.5", lw=0.8)
         ax_r.plot(s.time, s.weighted, ".", color=DATA_COLOR, ms=4, gid="residuals")

@@ -15,48 +15,77 @@ from fmuid.plots._common import (
     QUADRATIC_COLOR,
     THRESHOLD_COLOR,
     axis_label,
+    figure_of,
     new_figure,
     to_plot_coordinate,
 )
 from fmuid.profile.result import ParameterProfile, ProfileResult
 
 
-def profile_figure(result: ProfileResult, *, ncols: int = 3) -> Figure:
-    """Draw the profile likelihood of every free parameter, one panel each.
+def profile_figure(
+    result: ProfileResult, name: str | None = None, *, ax: Axes | None = None, ncols: int = 3
+) -> Figure:
+    """Draw the profile likelihood of every free parameter (one panel each), or of one.
 
     Each panel shows, against the parameter in fitted coordinates (log10 for log-scaled
     parameters): the profile chi2 (black), its quadratic approximation
-    ``chi2_opt + ((z - z_hat) / sd_z)**2`` from the Fisher information (gray), the pointwise
-    and simultaneous thresholds ``chi2_opt + threshold`` (red dashed, lower and upper), the
-    estimate (gray asterisk), points where another parameter sat on a bound (red dots) and
-    points whose re-fit failed (black crosses at the bottom of the panel).
+    ``chi2_opt + ((z - z_hat) / sd_z)**2`` from the Fisher information (gray; not for a result
+    read back with ``load_result``, which holds no Jacobian), the pointwise and simultaneous
+    thresholds ``chi2_opt + threshold`` (red dashed), the estimate (gray asterisk), points where
+    another parameter sat on a bound (red dots) and points whose re-fit failed (black crosses).
 
     Parameters
     ----------
     result
         The profile study.
+    name
+        Draw only this parameter's profile (default: every parameter).
+    ax
+        Draw into these axes (needs ``name``, or a result with one parameter); default: a new
+        figure.
     ncols
-        Panels per row.
+        Panels per row of a new figure.
 
     Returns
     -------
     Figure
-        One panel per parameter, in the order of ``result.parameters``.
+        The figure drawn on (the one holding ``ax`` when given).
+
+    Raises
+    ------
+    KeyError
+        If ``name`` was not profiled.
+    ValueError
+        If ``ax`` is given for several parameters.
 
     """
-    names = list(result.parameters)
-    fig, axes = new_figure(len(names), ncols=ncols)
+    names = [name] if name is not None else list(result.parameters)
+    for n in names:
+        if n not in result.parameters:
+            raise KeyError(f"{n!r} was not profiled; profiled: {', '.join(result.parameters)}")
+    if ax is not None and len(names) != 1:
+        raise ValueError("ax= draws one profile: pass the parameter's name")
+    if ax is None:
+        fig, axes = new_figure(len(names), ncols=ncols)
+        fig.suptitle(f"Profile likelihoods ({result.confidence:.0%} confidence)")
+    else:
+        fig, axes = figure_of(ax), [ax]
     fisher = result.fit.fisher_sd_z()
-    for ax, name in zip(axes, names, strict=True):
-        prof = result.parameters[name]
-        sd = prof.fisher_sd_z if math.isfinite(prof.fisher_sd_z) else fisher.get(name, math.inf)
-        _draw_profile(ax, prof, result.chi2, result.thresholds, sd)
-    fig.suptitle(f"Profile likelihoods ({result.confidence:.0%} confidence)")
+    for panel, n in zip(axes, names, strict=True):
+        prof = result.parameters[n]
+        sd = prof.fisher_sd_z if math.isfinite(prof.fisher_sd_z) else fisher.get(n, math.inf)
+        unit = result.fit.units.get(n, "")
+        _draw_profile(panel, prof, result.chi2, result.thresholds, sd, unit)
     return fig
 
 
 def _draw_profile(
-    ax: Axes, prof: ParameterProfile, chi2_opt: float, thresholds: dict[str, float], sd_z: float
+    ax: Axes,
+    prof: ParameterProfile,
+    chi2_opt: float,
+    thresholds: dict[str, float],
+    sd_z: float,
+    unit: str,
 ) -> None:
     ok = [p for p in prof.points if p.error is None and math.isfinite(p.chi2)]
     failed = [p for p in prof.points if p.error is not None or not math.isfinite(p.chi2)]
@@ -120,12 +149,12 @@ def _draw_profile(
     if y.size and np.nanmax(y) < top:
         top = float(np.nanmax(y)) + 0.1 * (top - chi2_opt)
     ax.set_ylim(chi2_opt - 0.1 * (top - chi2_opt), top)
-    ax.set_xlabel(axis_label(prof.name, prof.scale))
+    ax.set_xlabel(axis_label(prof.name, prof.scale, unit))
     ax.set_ylabel("chi2")
     ax.set_title(f"{prof.name}: {prof.status.replace('_', ' ')}", fontsize=9)
 
 
-def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
+def parameter_paths_figure(result: ProfileResult, name: str, *, ax: Axes | None = None) -> Figure:
     """Draw how the other free parameters move along the profile of ``name`` (thesis Fig 2.9).
 
     Every parameter is shown as its change from the estimate in fitted coordinates (decades for
@@ -139,11 +168,14 @@ def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
         The profile study.
     name
         The profiled parameter.
+    ax
+        Draw into these axes (default: a new figure).
 
     Returns
     -------
     Figure
-        One panel; one line per other free parameter, labelled with its name.
+        One panel (the figure holding ``ax`` when given); one line per other free parameter,
+        labelled with its name.
 
     Raises
     ------
@@ -157,8 +189,11 @@ def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
     scales = dict(zip(fit.names, fit.scales, strict=True))
     ok = [p for p in prof.points if p.error is None]
     x = np.array([to_plot_coordinate(p.value, prof.scale) for p in ok])
-    fig = Figure(figsize=(5.0, 3.2), layout="constrained")
-    ax = fig.add_subplot()
+    if ax is None:
+        fig = Figure(figsize=(8.0, 4.5), layout="constrained")
+        ax = fig.add_subplot()
+    else:
+        fig = figure_of(ax)
     for other in others:
         ref = to_plot_coordinate(fit.estimates[other], scales[other])
         y = np.array(
@@ -173,9 +208,9 @@ def parameter_paths_figure(result: ProfileResult, name: str) -> Figure:
     x_hi = to_plot_coordinate(hi, prof.scale) if hi is not None else (x.max() if x.size else 0.0)
     ax.axvspan(x_lo, x_hi, color="0.9", zorder=0, label="simultaneous CI")
     ax.axvline(to_plot_coordinate(prof.estimate, prof.scale), color=ESTIMATE_COLOR, ls=":", lw=1)
-    ax.set_xlabel(axis_label(name, prof.scale))
-    ax.set_ylabel("change from estimate (decades for log-scaled)")
+    ax.set_xlabel(axis_label(name, prof.scale, result.fit.units.get(name, "")))
+    ax.set_ylabel("change from estimate\n(decades if log-scaled, else own unit)")
     ax.set_title(f"Parameters along the profile of {name}")
     if others:
-        ax.legend(fontsize=8)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
     return fig

@@ -14,6 +14,7 @@ from scipy.stats import chi2 as chi2_dist
 from fmuid.fit.optimize import FitOptions, jacobian, make_fit_result, refine
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import Cost, FitResult
+from fmuid.model.simulator import fmu_summary
 from fmuid.profile.branch import BranchResult
 from fmuid.profile.checks import check_fit, distinct_valleys
 from fmuid.profile.health import check_health
@@ -141,6 +142,8 @@ def profile_problem(
         profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check)
     sims += problem.simulations - s0
     fit_check["valleys"] = len(valleys)
+    if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
+        fit = replace(fit, fmu_info=fmu_summary(problem.fmu_path, problem.spec.interface))
     return ProfileResult(
         fit=fit,
         confidence=conf,

@@ -11,7 +11,7 @@ from fmuid.errors import FmuidError
 from fmuid.fit.optimize import safe_residuals
 from fmuid.fit.predictor import FmuPredictor
 from fmuid.fit.problem import Problem
-from fmuid.model.simulator import Simulator
+from fmuid.model.simulator import Simulator, get_simulator, mark_reset_unreliable
 
 #: Relative step of the noise probe (scipy's default finite-difference step in fitted coordinates).
 PROBE_STEP = 1e-6
@@ -60,13 +60,12 @@ class Health:
 
     @property
     def smooth(self) -> bool:
-        """Whether the objective is deterministic and smooth enough for the default steps."""
-        return (
-            self.deterministic
-            and self.reset_matches_fresh is not False
-            and not any(self.jumps.values())
-            and self.diff_step <= PROBE_STEP
-        )
+        """Whether the objective is deterministic and smooth enough for the default steps.
+
+        An unreliable reset does not count: from its detection on every run gets a fresh
+        instance, so the objective is as smooth as the FMU.
+        """
+        return self.deterministic and not any(self.jumps.values()) and self.diff_step <= PROBE_STEP
 
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the check."""
@@ -101,9 +100,9 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
 
     """
     sims0 = problem.simulations
+    fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
     r0 = safe_residuals(problem, z_hat)
     deterministic = bool(np.array_equal(r0, safe_residuals(problem, z_hat)))
-    fresh = _fresh_matches(problem, z_hat)
     noise: dict[str, float] = {}
     jumps: dict[str, int] = {}
     steps = [PROBE_STEP]
@@ -163,14 +162,21 @@ def _departures(grid: np.ndarray, chi2: np.ndarray) -> int:
 
 
 def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
-    """Compare the reused instance's outputs with a fresh instance's, experiment by experiment."""
+    """Compare the reused instance's outputs with a fresh instance's, experiment by experiment.
+
+    When they differ, the FMU's reset is unreliable: :func:`mark_reset_unreliable` makes every
+    later run, here and in the branch workers forked after this check, use a fresh instance in
+    a recycled simulation process.
+    """
     predictor = problem.predictor
     if not isinstance(predictor, FmuPredictor):
         return None
+    if get_simulator(problem.fmu_path, predictor.interface).reset_reliable is False:
+        return False
     values = {**predictor.fixed, **problem.from_z(z_hat)}
     reused = problem.predict(problem.from_z(z_hat))
     try:
-        sim = Simulator(problem.fmu_path)
+        sim = Simulator(problem.fmu_path, predictor.interface, reset_reliable=False)
     except FmuidError:
         return False
     try:
@@ -178,9 +184,12 @@ def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
             t_in, u = predictor.inputs_of(exp)
             y = sim.simulate(values, t_in, u, exp.time, problem.outputs)
             problem.simulations += 1
-            for j, o in enumerate(problem.outputs):
-                if not np.array_equal(y[:, j], out[o], equal_nan=True):
-                    return False
+            if not all(
+                np.array_equal(y[:, j], out[o], equal_nan=True)
+                for j, o in enumerate(problem.outputs)
+            ):
+                mark_reset_unreliable(problem.fmu_path, predictor.interface)
+                return False
     except FmuidError:
         return False
     finally:

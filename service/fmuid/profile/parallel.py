@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from fmuid.fit.problem import Problem
-from fmuid.model.simulator import register_fmu_copy
+from fmuid.model.simulator import get_simulator, mark_reset_unreliable, register_fmu_copy
 from fmuid.profile.branch import BranchResult, settle_branch
 from fmuid.profile.walk import WalkOptions
 
@@ -147,8 +147,11 @@ def _run_dask(
 
     problem = tasks[0].problem
     [fmu_blob] = client.scatter([Path(problem.fmu_path).read_bytes()], broadcast=True, hash=True)
+    unreliable = get_simulator(problem.fmu_path, problem.spec.interface).reset_reliable is False
     futures = [
-        client.submit(run_branch_anywhere, t, problem.model.sha256, fmu_blob, pure=False)
+        client.submit(
+            run_branch_anywhere, t, problem.model.sha256, fmu_blob, unreliable, pure=False
+        )
         for t in tasks
     ]
     index = {f.key: k for k, f in enumerate(futures)}
@@ -162,8 +165,14 @@ def _run_dask(
     return [r for r in results if r is not None]
 
 
-def run_branch_anywhere(task: BranchTask, sha256: str, fmu_bytes: bytes) -> BranchResult:
-    """Walk a branch on a worker that may not see the FMU file: use a local copy if needed."""
+def run_branch_anywhere(
+    task: BranchTask, sha256: str, fmu_bytes: bytes, reset_unreliable: bool = False
+) -> BranchResult:
+    """Walk a branch on a worker that may not see the FMU file: use a local copy if needed.
+
+    ``reset_unreliable`` carries the submitting process's verdict on the FMU's reset (its
+    workers do not inherit it, as forked local workers do).
+    """
     path = Path(task.problem.fmu_path)
     if _file_sha256(path) != sha256:
         local = Path(tempfile.gettempdir()) / "fmuid-fmus" / sha256 / path.name
@@ -173,6 +182,8 @@ def run_branch_anywhere(task: BranchTask, sha256: str, fmu_bytes: bytes) -> Bran
             tmp.write_bytes(fmu_bytes)
             tmp.replace(local)
         register_fmu_copy(path, local)
+    if reset_unreliable:
+        mark_reset_unreliable(path, task.problem.spec.interface)
     return run_branch(task)
 
 

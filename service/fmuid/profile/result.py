@@ -141,6 +141,7 @@ class ParameterProfile:
             "estimate": float(self.estimate),
             "lower": float(self.lower),
             "upper": float(self.upper),
+            "scale": self.scale,
             "ci": {
                 "simultaneous": [_num(v) for v in self.ci_simultaneous],
                 "pointwise": [_num(v) for v in self.ci_pointwise],
@@ -177,19 +178,33 @@ class ProfileResult:
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the contract."""
         return {
-            "fmu": {"sha256": self.fit.fmu_sha256, "model_name": self.fit.model_name},
+            "fmu": {
+                "sha256": self.fit.fmu_sha256,
+                "model_name": self.fit.model_name,
+                **self.fit.fmu_info,
+            },
             "n_data": self.fit.n_data,
             "chi2": float(self.fit.chi2),
             "confidence": self.confidence,
             "thresholds": dict(self.thresholds),
             "sigma": {k: float(v) for k, v in self.fit.sigma.items()},
             "sigma_method": dict(self.fit.sigma_method),
-            "parameters": {n: p.to_dict() for n, p in self.parameters.items()},
+            "parameters": {
+                n: {**p.to_dict(), "unit": self.fit.units.get(n, "")}
+                for n, p in self.parameters.items()
+            },
             "better_optimum_found": self.better_optimum_found,
             "structural_check": self.structural_check,
             "checks": self.checks,
             "cost": self.cost.to_dict(),
+            "units": dict(self.fit.units),
         }
+
+    def to_frame(self) -> Any:
+        """Return a pandas table: estimate, both intervals, label and unit per parameter."""
+        from fmuid.results import to_frame
+
+        return to_frame(self)
 
 
 def _num(v: float | None) -> float | None:

@@ -1,4 +1,12 @@
-"""Experiment advice from profile studies of several designs at several noise levels."""
+"""Experiment advice from profile studies of several designs at several noise levels.
+
+One compact table per design: a row per parameter, a column per SNR level, each cell the
+width of the simultaneous CI (decades for log-scaled parameters, relative width otherwise) or,
+where the parameter is not identifiable, which ends are open and which parameters it trades
+against along its profile. Slopes are left out where the profile is flat (it never rises to
+the pointwise threshold on that side: the partners then wander freely) or where the profiled
+parameter barely moved (a slope over a tiny step is noise).
+"""
 
 from __future__ import annotations
 
@@ -7,6 +15,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from fmuid.profile.result import IDENTIFIABLE, ParameterProfile, ProfileResult
+from fmuid.report.page import Cell
+
+MIN_SPAN = 0.05
+"""Smallest move of the profiled parameter (decades, or relative) over which a slope is read."""
+MIN_SLOPE = 0.1
+"""Partners moving less than this (decades per decade) are left out."""
+TIE = 0.01
+"""Widths within this relative margin of the narrowest count as a tie: no design is marked."""
+SHORT = {"practically_non_identifiable": "PNI", "structurally_non_identifiable": "SNI"}
 
 
 @dataclass(frozen=True)
@@ -16,6 +33,26 @@ class StudyCase:
     design: str
     snr: float
     result: ProfileResult
+
+
+@dataclass(frozen=True)
+class AdviceTable:
+    """The advice for one design.
+
+    Attributes
+    ----------
+    design
+        Design name.
+    header
+        Column names: parameter, one per SNR level, and how often the design was narrowest.
+    rows
+        One row of cells per parameter.
+
+    """
+
+    design: str
+    header: tuple[str, ...]
+    rows: tuple[tuple[Cell, ...], ...]
 
 
 def log_width(prof: ParameterProfile) -> float:
@@ -31,181 +68,147 @@ def log_width(prof: ParameterProfile) -> float:
     return (hi - lo) / abs(prof.estimate) if prof.estimate else math.inf
 
 
-def design_advice(cases: Sequence[StudyCase]) -> list[str]:
-    """Say, per parameter, which design gives the narrowest interval at equal SNR.
+def advice_tables(cases: Sequence[StudyCase]) -> list[AdviceTable]:
+    """Build one table per design from the profile studies.
 
-    For each parameter and each SNR level tried with at least two designs, the design with the
-    smallest simultaneous CI width in log space wins that level; the sentence names the design
-    winning most levels, with the widths at the noisiest level where some design still gave a
-    finite interval.
+    A cell is marked ``good`` where its design gave the narrowest finite interval of every
+    design at that SNR level (by more than :data:`TIE`), ``bad`` where the parameter is not
+    identifiable.
 
     Parameters
     ----------
     cases
-        The profile studies.
+        The profile studies (every case profiles the same parameters).
 
     Returns
     -------
-    list of str
-        One sentence per parameter.
+    list of AdviceTable
+        In the order the designs first appear.
 
     """
+    if not cases:
+        return []
     snrs = sorted({c.snr for c in cases}, reverse=True)
     designs = list(dict.fromkeys(c.design for c in cases))
-    if len(designs) < 2:
-        return ["Only one design was tried: no comparison of designs is possible."]
     names = list(cases[0].result.parameters)
+    by_key = {(c.design, c.snr): c.result for c in cases}
+    best = _narrowest(by_key, designs, snrs, names)
+    tables = []
+    for design in designs:
+        rows = []
+        for name in names:
+            cells = [Cell(name)]
+            for snr in snrs:
+                result = by_key.get((design, snr))
+                if result is None:
+                    cells.append(Cell("not run"))
+                    continue
+                text, css = describe(result, name)
+                if best.get((name, snr)) == design and len(designs) > 1:
+                    css = "good"
+                    text += " (narrowest)"
+                cells.append(Cell(text, css))
+            wins = sum(best.get((name, snr)) == design for snr in snrs)
+            cells.append(Cell(f"{wins} of {len(snrs)}", "num"))
+            rows.append(tuple(cells))
+        header = ("parameter", *(f"SNR {s:g}" for s in snrs), "narrowest at")
+        tables.append(AdviceTable(design, header, tuple(rows)))
+    return tables
+
+
+def study_verdict(cases: Sequence[StudyCase]) -> list[str]:
+    """One line per design: how many parameters are identifiable at each SNR level."""
     lines = []
-    for name in names:
-        wins: dict[str, int] = dict.fromkeys(designs, 0)
-        levels = 0
-        example = ""
-        for snr in snrs:
-            at = {c.design: log_width(c.result.parameters[name]) for c in cases if c.snr == snr}
-            if len(at) < 2 or all(math.isinf(w) for w in at.values()):
-                continue
-            levels += 1
-            best = min(at, key=lambda d: at[d])
-            wins[best] += 1
-            example = f"at SNR {snr:g}: " + ", ".join(
-                f"{d} {_decades(w)}" for d, w in sorted(at.items(), key=lambda kv: kv[1])
-            )
-        if not levels:
-            lines.append(f"{name}: no design gave a finite interval at any SNR level tried.")
-            continue
-        best = max(wins, key=lambda d: wins[d])
-        lines.append(
-            f"{name}: {best} narrows it most ({wins[best]} of {levels} SNR levels; {example})."
-        )
+    for design in dict.fromkeys(c.design for c in cases):
+        parts = []
+        for c in sorted((c for c in cases if c.design == design), key=lambda c: -c.snr):
+            params = c.result.parameters
+            good = sum(p.status == IDENTIFIABLE for p in params.values())
+            parts.append(f"{good} of {len(params)} at SNR {c.snr:g}")
+        lines.append(f"{design}: identifiable {', '.join(parts)}.")
     return lines
 
 
-def _decades(width: float) -> str:
-    return "unbounded" if math.isinf(width) else f"{width:.3g} decades"
-
-
-@dataclass(frozen=True)
-class FlatDirection:
-    """What a non-identifiable parameter's profile shows.
-
-    Attributes
-    ----------
-    design, snr, parameter, status
-        Which study and parameter.
-    open_sides
-        ``"lower"`` and/or ``"upper"``: the sides where the CI has no end.
-    partners
-        Other parameters that move along the profile on an open side, with their slope in
-        decades per decade of the profiled parameter (largest first).
-    limited_by
-        Parameters on a bound where the profile rose.
-
-    """
-
-    design: str
-    snr: float
-    parameter: str
-    status: str
-    open_sides: tuple[str, ...]
-    partners: tuple[tuple[str, float], ...]
-    limited_by: tuple[str, ...]
-
-    def sentence(self) -> str:
-        """Describe the flat direction in words."""
-        sides = " and ".join(f"no {s} bound" for s in self.open_sides) or "flat profile"
-        text = (
-            f"{self.parameter} at {self.design}, SNR {self.snr:g}: "
-            f"{self.status.replace('_', ' ')} ({sides})"
-        )
-        if self.partners:
-            text += "; along its flat direction it trades against " + ", ".join(
-                f"{n} ({s:+.2f} decades per decade)" for n, s in self.partners
-            )
-        else:
-            text += "; the other parameters barely move: the data do not see it at all there"
-        if self.limited_by:
-            text += f"; the profile rises only where {', '.join(self.limited_by)} hit a bound"
-        return text + "."
-
-
-def flat_directions(cases: Sequence[StudyCase], min_slope: float = 0.1) -> list[FlatDirection]:
-    """Read the flat direction of every parameter that is not identifiable off its profile.
-
-    The slope of another parameter is its change (in fitted coordinates) between the estimate
-    and the outermost point of the open side, divided by the profiled parameter's change.
-
-    Parameters
-    ----------
-    cases
-        The profile studies.
-    min_slope
-        Partners moving less than this (decades per decade) are left out.
-
-    Returns
-    -------
-    list of FlatDirection
-        In the order of the cases and their parameters.
-
-    """
-    out = []
-    for case in cases:
-        res = case.result
-        scales = dict(zip(res.fit.names, res.fit.scales, strict=True))
-        for name, prof in res.parameters.items():
-            if prof.status == IDENTIFIABLE:
-                continue
-            sides = []
-            if prof.ci_simultaneous[0] is None:
-                sides.append("lower")
-            if prof.ci_simultaneous[1] is None:
-                sides.append("upper")
-            slopes: dict[str, float] = {}
-            for side in sides or ["lower", "upper"]:
-                for other, slope in _slopes(prof, scales, res.fit.estimates, side).items():
-                    if abs(slope) > abs(slopes.get(other, 0.0)):
-                        slopes[other] = slope
-            partners = tuple(
-                (n, s)
-                for n, s in sorted(slopes.items(), key=lambda kv: -abs(kv[1]))
-                if abs(s) >= min_slope
-            )
-            out.append(
-                FlatDirection(
-                    case.design,
-                    case.snr,
-                    name,
-                    prof.status,
-                    tuple(sides),
-                    partners,
-                    prof.limited_by,
-                )
-            )
+def _narrowest(
+    by_key: dict[tuple[str, float], ProfileResult],
+    designs: list[str],
+    snrs: list[float],
+    names: list[str],
+) -> dict[tuple[str, float], str]:
+    out = {}
+    for name in names:
+        for snr in snrs:
+            widths = {
+                d: log_width(by_key[(d, snr)].parameters[name])
+                for d in designs
+                if (d, snr) in by_key
+            }
+            finite = sorted((w, d) for d, w in widths.items() if math.isfinite(w))
+            tie = len(finite) > 1 and finite[1][0] <= finite[0][0] * (1 + TIE)
+            if finite and not tie:
+                out[(name, snr)] = finite[0][1]
     return out
 
 
-def _slopes(
-    prof: ParameterProfile, scales: dict[str, str], estimates: dict[str, float], side: str
-) -> dict[str, float]:
-    ok = [p for p in prof.points if p.error is None and math.isfinite(p.chi2)]
-    side_points = [
-        p for p in ok if (p.value < prof.estimate if side == "lower" else p.value > prof.estimate)
-    ]
-    if not side_points:
-        return {}
-    far = (
-        min(side_points, key=lambda p: p.value)
-        if side == "lower"
-        else max(side_points, key=lambda p: p.value)
+def describe(result: ProfileResult, name: str) -> tuple[str, str]:
+    """Return the cell text and CSS class of one parameter in one study."""
+    prof = result.parameters[name]
+    if prof.status == IDENTIFIABLE:
+        width = log_width(prof)
+        unit = "dec" if prof.scale == "log" else "rel."
+        return f"{width:.2g} {unit}", ""
+    sides = [s for s, end in zip(("lower", "upper"), prof.ci_simultaneous) if end is None]
+    text = SHORT.get(prof.status, prof.status) + (
+        f", open {' and '.join(sides)}" if sides else ", flat"
     )
-    dz = _z(far.value, prof.scale) - _z(prof.estimate, prof.scale)
-    if dz == 0:
-        return {}
-    return {
-        n: (_z(v, scales[n]) - _z(estimates[n], scales[n])) / dz
-        for n, v in far.params.items()
-        if n in scales
-    }
+    partners = trade_partners(result, name)
+    if partners:
+        text += "; trades with " + ", ".join(f"{n} ({s:+.2f})" for n, s in partners)
+    return text, "bad"
 
 
-def _z(value: float, scale: str) -> float:
-    return math.log10(value) if scale == "log" else value
+def trade_partners(result: ProfileResult, name: str) -> list[tuple[str, float]]:
+    """Parameters that move with ``name`` along its profile, with their slopes.
+
+    The slope of another parameter is its change (decades for log-scaled, relative otherwise)
+    between the estimate and the outermost point of an open side, divided by the profiled
+    parameter's change; the largest over the sides is kept. A side gives no slope when the
+    profile stays below the pointwise threshold there (flat) or moved less than
+    :data:`MIN_SPAN`.
+
+    Returns
+    -------
+    list of tuple
+        ``(name, slope)``, largest magnitude first, those below :data:`MIN_SLOPE` left out.
+
+    """
+    prof = result.parameters[name]
+    fit = result.fit
+    scales = dict(zip(fit.names, fit.scales, strict=True))
+    rise = result.thresholds.get("pointwise", 1.0)
+    open_sides = [s for s, end in zip(("lower", "upper"), prof.ci_simultaneous) if end is None]
+    slopes: dict[str, float] = {}
+    for side in open_sides or ["lower", "upper"]:
+        ok = [p for p in prof.points if p.error is None and math.isfinite(p.chi2)]
+        points = [p for p in ok if (p.value < prof.estimate) == (side == "lower")]
+        points = [p for p in points if p.value != prof.estimate]
+        if not points or max(p.chi2 for p in points) - result.chi2 < rise:
+            continue
+        far = (min if side == "lower" else max)(points, key=lambda p: p.value)
+        dz = _z(far.value, prof.scale, prof.estimate) - _z(prof.estimate, prof.scale, prof.estimate)
+        if abs(dz) < MIN_SPAN:
+            continue
+        for other, v in far.params.items():
+            if other in scales:
+                ref = fit.estimates[other]
+                slope = (_z(v, scales[other], ref) - _z(ref, scales[other], ref)) / dz
+                if abs(slope) > abs(slopes.get(other, 0.0)):
+                    slopes[other] = slope
+    ranked = sorted(slopes.items(), key=lambda kv: -abs(kv[1]))
+    return [(n, s) for n, s in ranked if abs(s) >= MIN_SLOPE]
+
+
+def _z(value: float, scale: str, ref: float) -> float:
+    if scale == "log":
+        return math.log10(value)
+    return value / abs(ref) if ref else value

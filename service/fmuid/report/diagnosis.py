@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 from typing import Any
 
+from fmuid.diagnose.catalogue import study_catalogue
 from fmuid.diagnose.plots import figures as diagnose_figures
 from fmuid.diagnose.result import verdict
 from fmuid.errors import FmuidError
@@ -20,25 +21,42 @@ TEST_NAMES = {
     "input_cross_correlation": "residual-input cross-correlation",
     "residual_bias": "residual mean",
     "chi2_goodness_of_fit": "chi2 against the noise",
+    "equal_predictions": "equal predictions (within the noise)",
 }
 
 
-def _params(values: dict[str, Any]) -> str:
-    return ", ".join(f"{k} = {fmt(v)}" for k, v in values.items())
+FIGURE_CAPTIONS = {
+    "fit": "Data, the base model and the augmented model, per experiment and output.",
+    "residuals": "Weighted residuals of both models; shaded: the located time windows.",
+    "spectrum": "Residual periodogram against the white-noise floor; shaded: the located band.",
+}
+
+
+def _params(values: dict[str, Any], units: dict[str, str]) -> str:
+    return ", ".join(f"{k} = {fmt(v)}{_space(units.get(k))}" for k, v in values.items())
+
+
+def _space(unit: str | None) -> str:
+    return f" {unit}" if unit else ""
 
 
 def _where(test: dict[str, Any]) -> str:
     return " / ".join(str(test[k]) for k in ("experiment", "output") if test.get(k)) or "all"
 
 
-def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
+def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
     added = d.get("added_parameters") or {}
     if added:
         page.table(
             ["added parameter", "estimate", "unit", "interval", "excludes the off value"],
             [
-                [n, v.get("estimate"), v.get("unit", ""), interval(v.get("ci") or (None, None)),
-                 "yes" if v.get("excludes_off") else "no"]
+                [
+                    n,
+                    v.get("estimate"),
+                    v.get("unit", ""),
+                    interval(v.get("ci") or (None, None)),
+                    "yes" if v.get("excludes_off") else "no",
+                ]
                 for n, v in added.items()
             ],  # fmt: skip
             caption="Parameters of the added physics (profile-likelihood interval)",
@@ -47,20 +65,24 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
     if ties:
         page.table(
             ["equally good effect", "parameters", "chi2", "test", "p-value"],
-            [[t["effect"], _params(t.get("parameters", {})), t.get("chi2"),
+            [[t["effect"], _params(t.get("parameters", {}), units), t.get("chi2"),
               str(t.get("test", "")).replace("_", " "), t.get("p_value")] for t in ties],
             caption="Explanations this data cannot tell apart from the named one",
         )  # fmt: skip
     absorbed = d.get("absorbed") or {}
     if absorbed:
         page.table(
-            ["parameter", "before", "status before", "after", "status after", "absorbs"],
+            ["parameter", "unit", "before", "status before", "after", "status after", "absorbs"],
             [
-                [n, f"{fmt(a['before']['estimate'])} {interval(a['before']['ci'])}",
-                 a["before"]["status"].replace("_", " "),
-                 f"{fmt(a['after']['estimate'])} {interval(a['after']['ci'])}",
-                 a["after"]["status"].replace("_", " "),
-                 "; ".join(a.get("reasons") or []) or "no"]
+                [
+                    n,
+                    units.get(n, "\u2014"),
+                    f"{fmt(a['before']['estimate'])} {interval(a['before']['ci'])}",
+                    a["before"]["status"].replace("_", " "),
+                    f"{fmt(a['after']['estimate'])} {interval(a['after']['ci'])}",
+                    a["after"]["status"].replace("_", " "),
+                    "; ".join(a.get("reasons") or []) or "no",
+                ]
                 for n, a in absorbed.items()
             ],  # fmt: skip
             caption="The original parameters without and with the added term",
@@ -68,16 +90,27 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
     if d.get("evidence"):
         page.table(
             ["test", "where", "p-value"],
-            [[TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
-             for e in d["evidence"]],  # fmt: skip
+            [
+                [TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
+                for e in d["evidence"]
+            ],  # fmt: skip
             caption="Evidence of the mismatch (tests rejected at the family-wise level)",
         )
     if d.get("candidates"):
         page.table(
             ["effect", "parameters", "chi2", "LR statistic", "p-value", "adjusted p", "round"],
-            [[c["effect"], _params(c.get("parameters", {})), c.get("chi2"), c.get("statistic"),
-              c.get("p_value"), c.get("p_adjusted"), c.get("stage", 1)]
-             for c in d["candidates"]],  # fmt: skip
+            [
+                [
+                    c["effect"],
+                    _params(c.get("parameters", {}), units),
+                    c.get("chi2"),
+                    c.get("statistic"),
+                    c.get("p_value"),
+                    c.get("p_adjusted"),
+                    c.get("stage", 1),
+                ]
+                for c in d["candidates"]
+            ],  # fmt: skip
             caption="Every candidate of the catalogue",
         )
     correction = d.get("generic_correction")
@@ -106,11 +139,13 @@ def _tables(page: HtmlPage, d: dict[str, Any]) -> None:
 def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) -> None:
     """Add the verdict, the tables and (with the problem) the figures of a diagnosis."""
     d = diagnosis.to_dict()
-    page.heading("Verdict")
-    page.paragraph(d.get("verdict") or verdict(d))
-    if d.get("description"):
-        page.paragraph(str(d["description"]))
+    units = _units(problem)
+    units.update(d.get("units") or {})
+    added = d.get("added_parameters") or {}
+    units.update({n: a["unit"] for n, a in added.items() if a.get("unit")})
+    page.verdict([d.get("verdict") or verdict(d), str(d.get("description") or "")])
     effect = d.get("effect")
+    page.heading("Summary")
     page.table(
         ["quantity", "value"],
         [
@@ -118,6 +153,9 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
             ["effect", effect if effect is not None else "none"],
             ["chi2 before", d.get("chi2_before")],
             ["chi2 after", d.get("chi2_after")],
+            ["likelihood-ratio p-value", d.get("lrt_p_value")],
+            ["number of data", d.get("n_data")],
+            ["family-wise false-alarm level", d.get("false_alarm")],
         ],
         table_id="diagnosis",
     )
@@ -133,12 +171,16 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
         ]
         page.table(["where", "value"], rows, caption="Location of the mismatch")
     page.table(
-        ["parameter", "before", "after"],
-        [[n, v.get("before"), v.get("after")] for n, v in d.get("parameters", {}).items()],
+        ["parameter", "unit", "before", "after"],
+        [
+            [n, units.get(n, "\u2014"), v.get("before"), v.get("after")]
+            for n, v in d.get("parameters", {}).items()
+        ],
         table_id="summary",
         caption="Free parameters before and after the augmentation",
     )
-    _tables(page, d)
+    _tables(page, d, units)
+    _whiteness(page, d)
     if problem is None:
         return
     try:
@@ -148,5 +190,27 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
         page.paragraph(f"Figures not drawn: {error}", note=True)
         return
     page.heading("Figures")
-    for caption, fig in figures.items():
-        page.figure(fig, f"diagnose_{caption}", caption)
+    for name, fig in figures.items():
+        page.figure(fig, f"diagnose_{name}", FIGURE_CAPTIONS.get(name, name))
+
+
+def _units(problem: Problem | None) -> dict[str, str]:
+    """Units of the problem's variables and of every catalogue parameter that declares one."""
+    if problem is None:
+        return {}
+    units = problem.units()
+    for candidate in study_catalogue(problem):
+        units.update({p.name: p.unit for p in candidate.parameters if p.unit})
+    return units
+
+
+def _whiteness(page: HtmlPage, d: dict[str, Any]) -> None:
+    before = d.get("whiteness_before") or {}
+    after = d.get("whiteness_after") or {}
+    if not before:
+        return
+    page.table(
+        ["experiment / output", "Ljung-Box p before", "Ljung-Box p after"],
+        [[k.replace("/", " / "), v, after.get(k)] for k, v in before.items()],
+        caption="Are the weighted residuals white? (small p: structure left in them)",
+    )

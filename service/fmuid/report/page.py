@@ -1,35 +1,41 @@
-"""A small builder of self-contained HTML pages: escaped text, tables and PNG figures beside."""
+"""Self-contained HTML pages from the package's jinja2 templates, PNG figures beside them."""
 
 from __future__ import annotations
 
-import html
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
+from typing import Any
 
+import jinja2
 from matplotlib.figure import Figure
 
-CSS = """
-body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 2em auto;
-       max-width: 1200px; padding: 0 1em; color: #222; line-height: 1.4; }
-h1 { font-size: 1.6em; border-bottom: 2px solid #c33; padding-bottom: .2em; }
-h2 { font-size: 1.25em; margin-top: 1.8em; color: #333; }
-table { border-collapse: collapse; margin: .8em 0; font-size: .9em; }
-th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; vertical-align: top; }
-th { background: #f3f3f3; }
-td.num { text-align: right; font-variant-numeric: tabular-nums; }
-caption { caption-side: top; text-align: left; font-weight: 600; padding-bottom: .3em; }
-figure { margin: 1em 0; }
-figure img { max-width: 100%; border: 1px solid #ddd; }
-figcaption { font-size: .85em; color: #555; }
-p.note { background: #fff6e0; border-left: 4px solid #e0a800; padding: .4em .8em; }
-ul.advice li { margin-bottom: .4em; }
-"""
+
+@cache
+def environment() -> jinja2.Environment:
+    """Return the template environment: the package templates, every value autoescaped."""
+    return jinja2.Environment(
+        loader=jinja2.PackageLoader("fmuid.report", "templates"),
+        autoescape=True,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
 
 
 def fmt(value: object, digits: int = 4) -> str:
-    """Format a cell value: numbers to ``digits`` significant digits, ``None`` as a dash."""
+    """Format a cell value: numbers to ``digits`` significant digits, ``None`` as a dash.
+
+    Mappings read ``key = value; ...`` and sequences ``a, b``, so that no Python literal
+    reaches a page.
+    """
+    if isinstance(value, Mapping):
+        return "; ".join(f"{k} = {fmt(v, digits)}" for k, v in value.items())
+    if isinstance(value, list | tuple | set):
+        return ", ".join(fmt(v, digits) for v in value)
     if value is None:
         return "\u2014"
     if isinstance(value, bool):
@@ -52,15 +58,20 @@ def interval(ends: Sequence[float | None], digits: int = 4) -> str:
     return f"[{lo}, {hi}]"
 
 
+def with_unit(label: str, unit: str | None) -> str:
+    """Return ``label [unit]``, or ``label`` alone when there is no unit."""
+    return f"{label} [{unit}]" if unit else label
+
+
 def file_slug(text: str) -> str:
     """Return a file-name-safe version of ``text``."""
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "figure"
 
 
 class HtmlPage:
-    """Collect the parts of a report page and write it with its figures.
+    """Collect the blocks of a report page and write it, with its figures, from the templates.
 
-    Every text given is escaped with :func:`html.escape`; nothing is inserted unescaped.
+    Every text given is escaped by the template environment; nothing is inserted unescaped.
 
     Parameters
     ----------
@@ -73,34 +84,33 @@ class HtmlPage:
 
     """
 
-    def __init__(self, directory: Path, title: str, *, dpi: int = 90):
+    def __init__(self, directory: Path, title: str, *, dpi: int = 100):
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.title = title
         self.dpi = dpi
-        self._parts: list[str] = [f"<h1>{html.escape(title)}</h1>"]
+        self.blocks: list[dict[str, Any]] = []
         self._files: set[str] = set()
 
     def heading(self, text: str, level: int = 2) -> None:
         """Add a heading of ``level`` (2 or deeper)."""
-        self._parts.append(f"<h{level}>{html.escape(text)}</h{level}>")
+        self.blocks.append({"kind": "heading", "text": text, "level": max(2, int(level))})
+
+    def verdict(self, lines: Sequence[str]) -> None:
+        """Add the highlighted verdict box (one paragraph per line)."""
+        self.blocks.append({"kind": "verdict", "lines": [str(line) for line in lines if line]})
 
     def paragraph(self, text: str, *, note: bool = False) -> None:
         """Add a paragraph; ``note`` highlights it."""
-        cls = ' class="note"' if note else ""
-        self._parts.append(f"<p{cls}>{html.escape(text)}</p>")
+        self.blocks.append({"kind": "paragraph", "text": text, "note": note})
 
     def bullets(self, items: Sequence[str], *, css_class: str = "") -> None:
         """Add a bulleted list."""
-        cls = f' class="{html.escape(css_class)}"' if css_class else ""
-        lis = "".join(f"<li>{html.escape(item)}</li>" for item in items)
-        self._parts.append(f"<ul{cls}>{lis}</ul>")
+        self.blocks.append({"kind": "bullets", "items": list(items), "css": css_class})
 
     def link(self, href: str, text: str) -> None:
         """Add a paragraph holding one link (relative links to sub-reports)."""
-        self._parts.append(
-            f'<p><a href="{html.escape(href, quote=True)}">{html.escape(text)}</a></p>'
-        )
+        self.blocks.append({"kind": "link", "href": href, "text": text})
 
     def table(
         self,
@@ -111,20 +121,15 @@ class HtmlPage:
         caption: str | None = None,
     ) -> None:
         """Add a table; numbers are right-aligned and formatted with :func:`fmt`."""
-        attr = f' id="{html.escape(table_id, quote=True)}"' if table_id else ""
-        out = [f"<table{attr}>"]
-        if caption:
-            out.append(f"<caption>{html.escape(caption)}</caption>")
-        out.append("<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>")
-        for row in rows:
-            cells = []
-            for cell in row:
-                num = isinstance(cell, int | float) and not isinstance(cell, bool)
-                cls = ' class="num"' if num else ""
-                cells.append(f"<td{cls}>{html.escape(fmt(cell))}</td>")
-            out.append("<tr>" + "".join(cells) + "</tr>")
-        out.append("</table>")
-        self._parts.append("".join(out))
+        self.blocks.append(
+            {
+                "kind": "table",
+                "header": list(header),
+                "rows": [[_cell(c) for c in row] for row in rows],
+                "table_id": table_id,
+                "caption": caption,
+            }
+        )
 
     def figure(self, fig: Figure, name: str, caption: str) -> Path:
         """Save ``fig`` as ``<name>.png`` beside the page and show it with ``caption``.
@@ -141,21 +146,27 @@ class HtmlPage:
         self._files.add(f"{stem}.png")
         path = self.directory / f"{stem}.png"
         fig.savefig(path, dpi=self.dpi)
-        src = html.escape(path.name, quote=True)
-        self._parts.append(
-            f'<figure><img src="{src}" alt="{html.escape(caption, quote=True)}">'
-            f"<figcaption>{html.escape(caption)}</figcaption></figure>"
-        )
+        self.blocks.append({"kind": "figure", "src": path.name, "caption": caption})
         return path
 
     def write(self) -> Path:
-        """Write ``index.html`` and return its path."""
-        body = "\n".join(self._parts)
-        text = (
-            '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
-            f"<title>{html.escape(self.title)}</title>\n<style>{CSS}</style>\n</head>\n"
-            f"<body>\n{body}\n</body>\n</html>\n"
-        )
+        """Render ``page.html`` into ``index.html`` and return its path."""
+        text = environment().get_template("page.html").render(title=self.title, blocks=self.blocks)
         path = self.directory / "index.html"
         path.write_text(text, encoding="utf-8")
         return path
+
+
+def _cell(value: object) -> dict[str, str]:
+    if isinstance(value, Cell):
+        return {"text": value.text, "css": value.css}
+    num = isinstance(value, int | float) and not isinstance(value, bool)
+    return {"text": fmt(value), "css": "num" if num else ""}
+
+
+@dataclass(frozen=True)
+class Cell:
+    """A table cell given as text, with its own CSS class (``num``, ``good``, ``bad``)."""
+
+    text: str
+    css: str = ""

@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from fmuid.fit.series import residual_series
 from fmuid.plots import (
     ci_compilation_figure,
     ci_entries_from_profile,
@@ -18,8 +19,9 @@ from fmuid.plots import (
     profile_figure,
     trajectory_band_figure,
 )
-from fmuid.report.advice import StudyCase, design_advice, flat_directions
-from fmuid.report.page import HtmlPage, file_slug, fmt, interval
+from fmuid.profile.band import trajectory_band
+from fmuid.report.advice import StudyCase, advice_tables, study_verdict
+from fmuid.report.page import HtmlPage, file_slug, fmt, interval, with_unit
 from fmuid.report.writer import write_report
 
 if TYPE_CHECKING:
@@ -77,6 +79,7 @@ def write_study_report(
     cases = [StudyCase(r.design.name, r.snr, r.result) for r in runs]
     designs = list(dict.fromkeys(r.design.name for r in runs))
     snrs = sorted({r.snr for r in runs}, reverse=True)
+    page.verdict(study_verdict(cases))
     page.paragraph(
         f"Thesis section 3.2.3.1 re-run on the FMU {fmu.name}: grid '{grid}' "
         f"({len(designs)} designs x {len(snrs)} SNR levels = {len(runs)} datasets), six tire "
@@ -127,23 +130,31 @@ def write_study_report(
         )
     page.heading("Experiment advice")
     page.paragraph(
-        "Which design narrows which parameter (widths of the 68% simultaneous CIs "
-        "in decades, compared at equal SNR):"
+        "One table per design. Each cell: the width of the 68% simultaneous CI at that SNR "
+        "(dec: decades, log10(upper/lower); rel.: (upper - lower)/estimate), green where this "
+        "design is the narrowest of all designs at that SNR. Red: not identifiable (PNI "
+        "practically, SNI structurally), with the open ends and the parameters it trades "
+        "against along its profile (decades per decade, read only where the profile rises)."
     )
-    page.bullets(design_advice(cases), css_class="advice")
-    flats = flat_directions(cases)
-    if flats:
-        page.paragraph(
-            "What the data lacked where a parameter was not identifiable (read off "
-            "the parameter paths along its profile):"
+    for table in advice_tables(cases):
+        page.table(
+            table.header,
+            table.rows,
+            table_id=f"advice_{file_slug(table.design)}",
+            caption=f"Design: {table.design}",
         )
-        page.bullets([f.sentence() for f in flats], css_class="advice")
-    else:
-        page.paragraph("Every parameter was identifiable in every dataset.")
     page.heading("All datasets")
     names = list(runs[0].result.parameters) if runs else []
     page.table(
-        ["design", "SNR", "sigma [rad/s]", "chi2", "n_data", "seconds", *names],
+        [
+            "design",
+            "SNR",
+            "sigma [rad/s]",
+            "chi2",
+            "n_data",
+            "wall time [s]",
+            *(with_unit(n, units.get(n)) for n in names),
+        ],  # fmt: skip
         [
             [
                 r.design.name,
@@ -195,13 +206,13 @@ def write_study_report(
     noisy = min((r for r in runs if r.design.name == designs[0]), key=lambda r: r.snr)
     problem = make_problem(fmu, [noisy.experiment], noisy.spec)
     page.figure(
-        trajectory_band_figure(problem, noisy.result),
+        trajectory_band_figure(trajectory_band(problem, noisy.result)),
         "trajectory_band",
         f"Trajectories inside the simultaneous CIs, {noisy.design.name}, SNR "
         f"{noisy.snr:g} (as thesis Fig 3.5).",
     )
     page.figure(
-        fit_figure(problem, noisy.result.fit),
+        fit_figure(residual_series(problem, noisy.result.fit.estimates)),
         "fit_noisiest",
         f"Fit and weighted residuals, {noisy.design.name}, SNR {noisy.snr:g}.",
     )
@@ -217,4 +228,5 @@ def write_study_report(
 
 def _cell(ci: tuple[float | None, float | None], status: str) -> str:
     tag = {"practically_non_identifiable": " PNI", "structurally_non_identifiable": " SNI"}
-    return f"{fmt(ci[0], 3)} \u2013 {fmt(ci[1], 3)}{tag.get(status, '')}"
+    lo, hi = (fmt(end, 3) if end is not None else "open" for end in ci)
+    return f"{lo} \u2013 {hi}{tag.get(status, '')}"

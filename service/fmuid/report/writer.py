@@ -12,15 +12,18 @@ from matplotlib.figure import Figure
 
 from fmuid.errors import FmuidError
 from fmuid.fit.result import FitResult
+from fmuid.fit.series import residual_series
 from fmuid.plots import (
     fit_figure,
     parameter_paths_figure,
     profile_figure,
     trajectory_band_figure,
 )
-from fmuid.profile.result import ProfileResult
+from fmuid.profile.band import trajectory_band
+from fmuid.profile.result import ParameterProfile, ProfileResult
 from fmuid.report.diagnosis import diagnosis_sections
-from fmuid.report.page import HtmlPage, interval
+from fmuid.report.page import HtmlPage, fmt, interval
+from fmuid.report.verdict import profile_verdict, quality_text
 
 if TYPE_CHECKING:
     from fmuid.data import Experiment, Spec
@@ -89,36 +92,40 @@ def write_report(
 
 def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | None) -> None:
     fit = result.fit
+    units = fit.units
+    page.verdict(profile_verdict(result))
     page.heading("Summary")
-    rows = []
-    for name, p in result.parameters.items():
-        label = p.status.replace("_", " ")
-        if p.limited_by:
-            label += f" (CI end set by {', '.join(p.limited_by)} on a bound)"
-        rows.append(
-            [
-                name,
-                p.estimate,
-                interval(p.ci_simultaneous),
-                interval(p.ci_pointwise),
-                label,
-                interval((p.lower, p.upper)),
-                p.scale,
-            ]
-        )
+    level = f"{result.confidence:.0%}"
     page.table(
         [
             "parameter",
+            "unit",
             "estimate",
-            f"CI simultaneous ({result.confidence:.0%})",
-            f"CI pointwise ({result.confidence:.0%})",
+            f"CI simultaneous ({level})",
+            f"CI pointwise ({level})",
             "label",
+            "why",
+            "quality",
             "bounds",
             "scale",
         ],
-        rows,
+        [
+            [
+                name,
+                units.get(name, "\u2014"),
+                p.estimate,
+                interval(p.ci_simultaneous),
+                interval(p.ci_pointwise),
+                _label(p),
+                p.status_reason or "\u2014",
+                quality_text(p.quality),
+                interval((p.lower, p.upper)),
+                p.scale,
+            ]
+            for name, p in result.parameters.items()
+        ],  # fmt: skip
         table_id="summary",
-        caption="Estimates and likelihood-based confidence intervals",
+        caption="Estimates and likelihood-based confidence intervals (in the unit given)",
     )
     if result.better_optimum_found:
         page.paragraph(
@@ -147,24 +154,41 @@ def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | 
             page,
             "fit",
             "Data and fitted model; weighted residuals, Q-Q plot and histogram.",
-            lambda: fit_figure(problem, fit),
+            lambda: fit_figure(residual_series(problem, fit.estimates)),
         )
         _try_figure(
             page,
             "trajectory_band",
             "Outputs over parameter sets inside the simultaneous CI.",
-            lambda: trajectory_band_figure(problem, result),
+            lambda: trajectory_band_figure(trajectory_band(problem, result)),
         )
 
 
+def _label(p: ParameterProfile) -> str:
+    label = p.status.replace("_", " ")
+    if p.limited_by:
+        label += f" (CI end set by {', '.join(p.limited_by)} on a bound)"
+    return label
+
+
 def _fit_sections(page: HtmlPage, fit: FitResult, problem: Problem | None) -> None:
-    page.heading("Summary")
     info = fit.to_dict()["parameters"]
+    on_bound = [n for n in fit.names if info[n]["at_bound"]]
+    page.verdict(
+        [
+            f"Best fit of {len(fit.names)} parameters to {fit.n_data} data: chi2 = "
+            f"{fmt(fit.chi2)}.",
+            f"On a bound: {', '.join(on_bound)}." if on_bound else "No estimate is on a bound.",
+            "Run a profile study for confidence intervals and identifiability labels.",
+        ]
+    )
+    page.heading("Summary")
     page.table(
-        ["parameter", "estimate", "label", "bounds", "scale"],
+        ["parameter", "unit", "estimate", "label", "bounds", "scale"],
         [
             [
                 n,
+                fit.units.get(n, "\u2014"),
                 fit.estimates[n],
                 "on a bound" if info[n]["at_bound"] else "inside bounds",
                 interval((fit.lower[n], fit.upper[n])),
@@ -184,7 +208,7 @@ def _fit_sections(page: HtmlPage, fit: FitResult, problem: Problem | None) -> No
             page,
             "fit",
             "Data and fitted model; weighted residuals, Q-Q plot and histogram.",
-            lambda: fit_figure(problem, fit),
+            lambda: fit_figure(residual_series(problem, fit.estimates)),
         )
 
 
@@ -204,14 +228,20 @@ def _study_numbers(
         rows.append(["confidence", confidence])
         rows += [[f"threshold {k} (chi2 rise)", v] for k, v in thresholds.items()]
     rows += [
-        [f"sigma {o}", f"{v:.4g} ({fit.sigma_method.get(o, '')})"] for o, v in fit.sigma.items()
+        [f"sigma {o}", f"{fmt(v)}{_space(fit.units.get(o))} ({fit.sigma_method.get(o, '')})"]
+        for o, v in fit.sigma.items()
     ]
+    rows += [[f"fixed {n}", f"{fmt(v)}{_space(fit.units.get(n))}"] for n, v in fit.fixed.items()]
     rows += [
         ["global search", fit.global_search],
         ["simulations", int(cost["simulations"])],
-        ["seconds", float(cost["seconds"])],
+        ["wall time [s]", float(cost["seconds"])],
     ]
     page.table(["quantity", "value"], rows, table_id="study", caption="Study")
+
+
+def _space(unit: str | None) -> str:
+    return f" {unit}" if unit else ""
 
 
 def _structural(page: HtmlPage, check: Mapping[str, Any]) -> None:
@@ -248,9 +278,3 @@ def _try_figure(page: HtmlPage, name: str, caption: str, draw: Callable[[], Figu
         page.paragraph(f"Figure '{name}' could not be drawn: {error}", note=True)
         return
     page.figure(fig, name, caption)
-
-
-def _plain(value: object) -> object:
-    if isinstance(value, list | tuple):
-        return ", ".join(str(_plain(v)) for v in value)
-    return value

@@ -1,0 +1,87 @@
+"""The generic error-model test: closed forms, its null distribution, and its power.
+
+The data come from an independent scipy solution of the mass-spring-damper (and, for the
+power, of the same mass with an absorber mass hung on it that the FMU does not have).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.diagnose import generic
+from fmuid.fit.optimize import fit_problem, safe_residuals
+from fmuid.stages import make_problem
+
+TRUE = {"m": 1.1, "k": 4.4, "b": 1.6}
+SIGMA = 0.02
+TIMES = np.arange(0.0, 20.0 + 1e-9, 0.1)
+FORCE = (TIMES, 4.0 * np.sin(2 * np.pi * (0.05 + 0.02 * TIMES) * TIMES))
+
+
+def test_laguerre_step_responses_match_their_closed_forms() -> None:
+    pole_hz = 0.3
+    p = 2 * np.pi * pole_hz
+    t = np.linspace(0.0, 10.0, 401)
+    y = generic.laguerre(pole_hz, t, np.ones_like(t))
+    first = np.sqrt(2 * p) / p * (1 - np.exp(-p * t))
+    second = np.sqrt(2 * p) * ((1 - np.exp(-p * t)) / p - 2 * t * np.exp(-p * t))
+    np.testing.assert_allclose(y[:, 0], first, atol=1e-9)
+    np.testing.assert_allclose(y[:, 1], second, atol=1e-9)
+
+
+def _data(seed: int, absorber: float) -> object:
+    """Position and velocity of the mass; ``absorber`` kg hung on it by a spring and damper."""
+    k2, b2 = 2.0, 0.3
+
+    def rhs(t: float, s: np.ndarray) -> list[float]:
+        x, v, x2, v2 = s
+        coupling = k2 * (x2 - x) + b2 * (v2 - v) if absorber > 0 else 0.0
+        f = np.interp(t, *FORCE)
+        a = (f - TRUE["b"] * v - TRUE["k"] * x + coupling) / TRUE["m"]
+        return [v, a, v2, -coupling / absorber if absorber > 0 else 0.0]
+
+    sol = integrate.solve_ivp(
+        rhs, (0.0, TIMES[-1]), [0.0] * 4, t_eval=TIMES, rtol=1e-10, atol=1e-12, max_step=0.02
+    )
+    noise = np.random.default_rng(seed).normal(0.0, SIGMA, (2, TIMES.size))
+    columns = {"f": FORCE[1], "x": sol.y[0] + noise[0], "v": sol.y[1] + noise[1]}
+    return experiment_from_arrays("chirp.csv", TIMES, columns)
+
+
+def _generic_p(msd_fmu: Path, seed: int, absorber: float) -> float:
+    spec = spec_from_json(
+        json.dumps(
+            {
+                "parameters": {
+                    n: {"start": v, "lower": 0.05, "upper": 20.0} for n, v in TRUE.items()
+                },
+                "inputs": ["f"],
+                "outputs": {"x": {"sigma": SIGMA}, "v": {"sigma": SIGMA}},
+                "global_search": False,
+            }
+        )
+    )
+    problem = make_problem(msd_fmu, [_data(seed, absorber)], spec)  # type: ignore[list-item]
+    fit = fit_problem(problem, global_search=False, seed=0)
+    test, _ = generic.generic_test(
+        problem, safe_residuals(problem, fit.z_estimate()), fit.jacobian, seed
+    )
+    assert test is not None and test.test == generic.NAME
+    return test.p_value
+
+
+@pytest.mark.slow
+def test_the_test_holds_its_level_on_the_right_model(msd_fmu: Path) -> None:
+    p = np.array([_generic_p(msd_fmu, seed, 0.0) for seed in range(60)])
+    assert stats.kstest(p, "uniform").pvalue > 1e-3
+    assert np.mean(p < 0.05) <= 0.05 + 3 * np.sqrt(0.05 * 0.95 / len(p))
+
+
+def test_an_unmodelled_absorber_mass_is_found(msd_fmu: Path) -> None:
+    assert _generic_p(msd_fmu, 1, 0.15) < 1e-6

@@ -1,0 +1,103 @@
+"""A second foreign FMI implementation: a first-order lag exported by pythonfmu at test time,
+simulated against its closed form, fitted and profiled against an independent scipy profile."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+from scipy.stats import chi2 as chi2_dist
+
+import fmuid
+from fmuid.data import Experiment, experiment_from_arrays, spec_from_json
+from fmuid.model.simulator import INPUT_STEP, Simulator
+
+K, TAU, SIGMA = 2.0, 0.5, 0.02
+T = np.round(np.arange(0.0, 4.0 + 1e-9, 0.1), 10)
+
+
+def _step(k: float, tau: float) -> np.ndarray:
+    return k * (1.0 - np.exp(-T / tau))
+
+
+def test_step_response_is_the_closed_form(first_order_fmu: Path) -> None:
+    sim = Simulator(first_order_fmu)
+    assert sim.model.fmi_version == "2.0" and sim.model.interface == "CoSimulation"
+    for k, tau in [(K, TAU), (0.7, 1.9), (5.0, 0.05)]:
+        y = sim.simulate({"K": k, "tau": tau}, T[:1], {"u": np.ones(1)}, T, ["y"])[:, 0]
+        np.testing.assert_allclose(y, _step(k, tau), rtol=0, atol=1e-13)
+
+
+def test_ramp_is_held_over_sub_steps(first_order_fmu: Path) -> None:
+    """No input derivatives: the ramp is sampled every INPUT_STEP and held, so the output lags
+    the exact ramp response K (t - tau + tau exp(-t/tau)) by K * INPUT_STEP / 2 at most."""
+    sim = Simulator(first_order_fmu)
+    t = T[T <= 2.0]
+    y = sim.simulate({}, np.array([0.0, 2.0]), {"u": np.array([0.0, 2.0])}, t, ["y"])[:, 0]
+    exact = K * (t - TAU + TAU * np.exp(-t / TAU))
+    error = exact - y
+    assert np.all(error >= 0) and np.max(error) <= K * INPUT_STEP / 2 * (1 + 1e-6)
+    assert np.max(error) > K * INPUT_STEP / 2 * 0.9  # the hold is there (a real check)
+    assert "sub-steps" in sim.input_handling
+
+
+@pytest.fixture(scope="module")
+def lag_data() -> Experiment:
+    noise = np.random.default_rng(3).normal(0.0, SIGMA, T.size)
+    return experiment_from_arrays("lag.csv", T, {"u": np.ones(T.size), "y": _step(K, TAU) + noise})
+
+
+SPEC = {
+    "parameters": {
+        "K": {"start": 1.0, "lower": 0.1, "upper": 10.0},
+        "tau": {"start": 1.0, "lower": 0.05, "upper": 5.0},
+    },
+    "inputs": ["u"],
+    "outputs": {"y": {"sigma": SIGMA}},
+    "global_search": False,
+}
+
+
+def _scipy_profiles(y: np.ndarray) -> dict[str, tuple[float, float]]:
+    """Pointwise 68 % intervals of K and tau from the closed form (independent of fmuid)."""
+
+    def chi2(k: float, tau: float) -> float:
+        return float(np.sum(((y - _step(k, tau)) / SIGMA) ** 2))
+
+    def best_tau(k: float) -> float:
+        opt = minimize_scalar(lambda lt: chi2(k, np.exp(lt)), bounds=(np.log(0.05), np.log(5)),
+                              method="bounded", options={"xatol": 1e-12})  # fmt: skip
+        return float(opt.fun)
+
+    def best_k(tau: float) -> float:
+        g = 1.0 - np.exp(-T / tau)
+        return chi2(float(g @ y / (g @ g)), tau)
+
+    def interval(profile: Callable[[float], float], guess: float) -> tuple[float, float]:
+        opt = minimize_scalar(profile, bounds=(guess / 2, guess * 2), method="bounded",
+                              options={"xatol": 1e-12})  # fmt: skip
+        level = opt.fun + chi2_dist.ppf(0.68, 1)
+        lo = brentq(lambda v: profile(v) - level, guess / 2, opt.x, xtol=1e-12)
+        hi = brentq(lambda v: profile(v) - level, opt.x, guess * 2, xtol=1e-12)
+        return lo, hi
+
+    return {"K": interval(best_tau, K), "tau": interval(best_k, TAU)}
+
+
+def test_fit_and_profile_match_scipy(first_order_fmu: Path, lag_data: Experiment) -> None:
+    spec = spec_from_json(json.dumps(SPEC))
+    result = fmuid.profile(first_order_fmu, [lag_data], spec, workers=1)
+    reference = _scipy_profiles(lag_data.columns["y"])
+    for name, (lo, hi) in reference.items():
+        got = result.parameters[name].ci_pointwise
+        half = (hi - lo) / 2
+        assert got[0] == pytest.approx(lo, abs=2e-3 * half), name
+        assert got[1] == pytest.approx(hi, abs=2e-3 * half), name
+        assert result.parameters[name].status == "identifiable"
+    fmu = result.to_dict()["fmu"]
+    assert fmu["interface"] == "CoSimulation" and "sub-steps" in fmu["input_handling"]
+    assert fmu["instances"] == "one instance, reset between runs"

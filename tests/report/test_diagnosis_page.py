@@ -1,0 +1,56 @@
+import html
+import re
+
+from fmuid.report import write_report
+from fmuid.report.page import fmt
+
+
+class _Unexplained:
+    """An 'unexplained' diagnosis with nested dicts wherever the JSON has them."""
+
+    def to_dict(self):
+        return {
+            "mismatch": True,
+            "effect": "unexplained",
+            "description": "A mismatch no catalogue entry explains.",
+            "evidence": [{"test": "residual_whiteness", "output": "x", "experiment": "a.csv",
+                          "p_value": 1e-8, "statistic": 80.0, "df": 20.0}],
+            "location": {"outputs": ["x"], "experiments": ["a.csv"], "time_windows": [[1, 2]],
+                         "frequency_hz": [0.5, 1.0], "chi2_gain": {"a.csv/x": 12.0}},
+            "candidates": [{"effect": "gyro_bias", "parameters": {"bias_x": 0.1}, "chi2": 90.0,
+                            "p_value": 0.2, "statistic": 1.0, "p_adjusted": 0.5, "stage": 1}],
+            "indistinguishable": [{"effect": "sensor_lag", "parameters": {"tau_sensor": 0.1},
+                                   "chi2": 91.0, "test": "equal_predictions", "p_value": 1.0,
+                                   "intervals": {"tau_sensor": {"estimate": 0.1}}}],
+            "added_parameters": {},
+            "absorbed": {},
+            "generic_correction": {
+                "model": "ARX(4, 6)", "chi2_before": 120.0, "chi2_after": 60.0,
+                "noise_chi2": 55.0, "structure_fraction": 0.92,
+                "outputs": {"x": {"chi2_before": 120.0}},
+                "dynamics": {"mode": {"frequency_hz": 0.8, "damping": 0.1},
+                             "frequency_hz": [0.5, 1.0], "band_output": "x",
+                             "leads": None},
+            },
+            "chi2_before": 120.0,
+            "chi2_after": 120.0,
+            "parameters": {"k": {"before": 4.4, "after": 4.4}},
+            "units": {"k": "N/m", "x": "m"},
+            "whiteness_before": {"a.csv/x": 1e-8},
+            "whiteness_after": {"a.csv/x": 1e-8},
+        }  # fmt: skip
+
+
+def test_no_python_literal_reaches_the_page_and_units_show(tmp_path):
+    text = html.unescape(write_report(_Unexplained(), tmp_path).read_text())
+    body = re.sub(r"<[^>]+>", " ", text.split("<body>")[1])
+    assert "{'" not in body and "': " not in body
+    assert body.index("Verdict") < body.index("Summary")
+    assert re.search(r"k\s+N/m\s+4\.4\s+4\.4", body)
+    assert "0.8 Hz, damping ratio 0.1" in body
+    assert "tau_sensor = 0.1" in body and "bias_x = 0.1" in body
+
+
+def test_fmt_writes_mappings_and_lists_as_text():
+    assert fmt({"a": 1.0, "b": [1, None]}) == "a = 1; b = 1, \u2014"
+    assert fmt({"a": {"b": 2.5}}) == "a = b = 2.5"
