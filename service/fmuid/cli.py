@@ -75,7 +75,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from fmuid.console import info_text
     from fmuid.model.info import info
 
-    described = info(args.model)
+    described = info(args.model, health=not args.no_health)
     text = json.dumps(described.to_dict(), indent=2) if args.json else info_text(described)
     print(text)  # noqa: T201
     return EXIT_OK
@@ -286,6 +286,9 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("info", help="a model's parameters, inputs and outputs")
     p.add_argument("model", help="FMU file or built-in model name")
     p.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    p.add_argument(
+        "--no-health", action="store_true", help="do not run the FMU at its start values"
+    )
     p.set_defaults(func=_cmd_info)
 
     p = sub.add_parser("simulate", help="every FMU output at the data's times")

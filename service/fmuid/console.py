@@ -181,6 +181,19 @@ def info_text(info: ModelInfo) -> str:
     section("parameters", info.parameters, True)
     section("inputs", info.inputs, False)
     section("outputs", info.outputs, False)
+    if info.health is not None:
+        h = info.health
+        start, stop = h.horizon_s
+        if not h.simulates:
+            found = f"does not simulate at its start values: {h.message}"
+        else:
+            found = "simulates at its start values; " + (
+                "repeated runs are equal" if h.deterministic else "repeated runs DIFFER"
+            )
+            found += {True: "; a reset run equals a fresh instance's", None: "",
+                      False: "; its reset is UNRELIABLE (fmuid gives every run a fresh instance)"
+                      }[h.reset_reliable]  # fmt: skip
+        parts.append(f"\nhealth ({start:g}-{stop:g} s): {found}")
     return "\n".join(parts)
 
 

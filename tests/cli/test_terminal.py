@@ -58,6 +58,20 @@ def test_info_lists_what_a_spec_needs(builtin_dir, capsys):
     assert "built-in model" in err
 
 
+def test_info_says_what_runs_at_the_start_values_showed(builtin_dir, leaky_reset_fmu, capsys):
+    code, out, err = run(["info", "msd", "--json"], capsys)
+    assert code == 0, err
+    assert json.loads(out)["health"] == {
+        "simulates": True, "deterministic": True, "reset_reliable": True,
+        "horizon_s": [0.0, 10.0], "message": "",
+    }  # fmt: skip
+    code, out, err = run(["info", leaky_reset_fmu], capsys)
+    assert code == 0, err
+    assert "its reset is UNRELIABLE" in out
+    code, out, _ = run(["info", "msd", "--json", "--no-health"], capsys)
+    assert json.loads(out)["health"] is None
+
+
 def test_simulate_with_fixed_values_only_and_input_columns(builtin_dir, tmp_path, capsys):
     (tmp_path / "in.csv").write_text("time,f\n0,40\n1,40\n2,40\n")
     (tmp_path / "spec.json").write_text(json.dumps({"fixed": {"k": 2.0}}))

@@ -10,6 +10,7 @@ import fmpy
 
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel, Variable
+from fmuid.model.smoke import ModelHealth, model_health
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,9 @@ class ModelInfo:
         Every interface the FMU has.
     parameters, inputs, outputs
         The variables of each causality, in file order.
+    health
+        What runs at the start values showed (:mod:`fmuid.model.smoke`), or ``None`` when
+        not asked for.
 
     """
 
@@ -69,6 +73,7 @@ class ModelInfo:
     parameters: tuple[VariableInfo, ...]
     inputs: tuple[VariableInfo, ...]
     outputs: tuple[VariableInfo, ...]
+    health: ModelHealth | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-ready form (``fmuid info --json``)."""
@@ -77,13 +82,16 @@ class ModelInfo:
         return out
 
 
-def info(model: str | Path) -> ModelInfo:
+def info(model: str | Path, health: bool = True) -> ModelInfo:
     """Describe a model: parameters (start, bounds, unit, description), inputs and outputs.
 
     Parameters
     ----------
     model
         An FMU file, or the name of a built-in model (e.g. ``"msd"``).
+    health
+        Also run the FMU at its start values: does it simulate, is a run repeatable, does a
+        reset give the same run as a fresh instance.
 
     Returns
     -------
@@ -127,7 +135,17 @@ def info(model: str | Path) -> ModelInfo:
         parameters=entries(fmu.parameters),
         inputs=entries(fmu.inputs),
         outputs=entries(fmu.outputs),
+        health=model_health(path, fmu, _stop_time(description)) if health else None,
     )
+
+
+def _stop_time(description: Any) -> float | None:
+    """Return the default experiment's stop time, if the FMU declares one."""
+    experiment = getattr(description, "defaultExperiment", None)
+    try:
+        return float(experiment.stopTime) if experiment and experiment.stopTime else None
+    except (TypeError, ValueError):
+        return None
 
 
 def _bound(value: object) -> float | None:

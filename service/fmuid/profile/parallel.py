@@ -73,10 +73,15 @@ def run_branch(task: BranchTask) -> BranchResult:
     return task.walk(on_point)
 
 
-def _init_worker(progress_queue: Any, owner: int) -> None:
-    """Set up a pool worker: it dies with its parent (``PR_SET_PDEATHSIG``) and reports points."""
+def _init_worker(progress_queue: Any, owner: int, problem: Problem, unreliable: bool) -> None:
+    """Set up a pool worker: die with the parent, report points, know the reset verdict.
+
+    Forkserver workers do not inherit the owner's verdict on the FMU's reset: it is passed.
+    """
     global _PROGRESS_QUEUE
     die_with_pool_owner(owner)
+    if unreliable:
+        mark_reset_unreliable(problem.fmu_path, problem.spec.interface)
     _PROGRESS_QUEUE = progress_queue
 
 
@@ -121,12 +126,17 @@ def run_branches(
         return out
     # forkserver, not fork: this process may have threads (BLAS, a job's watchdog); the server
     # dies with this process, and its workers with it (see fmuid.profile.pool_guard)
+    problem = tasks[0].problem
+    unreliable = get_simulator(problem.fmu_path, problem.spec.interface).reset_reliable is False
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["fmuid.profile.forkserver_guard", __name__])
     os.environ[POOL_PARENT_ENV] = str(os.getpid())
     progress_queue = ctx.Queue()
     with ProcessPoolExecutor(
-        n, mp_context=ctx, initializer=_init_worker, initargs=(progress_queue, os.getpid())
+        n,
+        mp_context=ctx,
+        initializer=_init_worker,
+        initargs=(progress_queue, os.getpid(), problem, unreliable),
     ) as pool:
         futures: list[Future[BranchResult]] = [pool.submit(run_branch, t) for t in tasks]
         pending = set(futures)
@@ -153,7 +163,9 @@ def _run_dask(
     from distributed import as_completed
 
     problem = tasks[0].problem
-    [fmu_blob] = client.scatter([Path(problem.fmu_path).read_bytes()], broadcast=True, hash=True)
+    # the FMU's bytes travel with each task, not scattered: a task whose worker dies is run
+    # again elsewhere, while scattered data lost with its worker cancels the tasks that need it
+    fmu_blob = Path(problem.fmu_path).read_bytes()
     unreliable = get_simulator(problem.fmu_path, problem.spec.interface).reset_reliable is False
     futures = [
         client.submit(

@@ -98,17 +98,6 @@ class ProfileQuality:
             self.check_simulations + other.check_simulations,
         )
 
-    def summary(self) -> str:
-        """Return the record in one line for reports, with why it is unsettled if it is."""
-        text = (
-            f"{self.checks} checks ({self.starts} starts), {self.jumps} jumps, "
-            f"{self.lower_valleys} lower valleys, {self.rewalks} re-walks, "
-            f"{self.end_refits} end re-fits"
-        )
-        if self.unsettled:
-            text += "; unsettled: " + "; ".join(self.unsettled)
-        return text
-
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the record."""
         return {

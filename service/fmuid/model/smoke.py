@@ -1,0 +1,85 @@
+"""A model's health without data: whether it runs, repeats a run and keeps its reset.
+
+``fmuid info`` runs the FMU three times at its start values, the inputs held at their start
+values, over its default experiment (or one second): a fresh instance, the same instance after
+a reset (the simulator compares the two; see :mod:`fmuid.model.simulator`), and once more.
+The profile stage's health check (:mod:`fmuid.profile.health`) goes further with data: the
+objective's noise floor and its jumps along each parameter.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fmuid.errors import FmuError
+from fmuid.model.fmu import USABLE, FmuModel
+from fmuid.model.simulator import Simulator
+
+SAMPLES = 11
+"""Output times of each run."""
+
+HORIZON = 1.0
+"""Length of the runs [s] when the FMU declares no default experiment."""
+
+
+@dataclass(frozen=True)
+class ModelHealth:
+    """What the runs at the start values showed.
+
+    Attributes
+    ----------
+    simulates
+        Whether the runs finished with finite outputs.
+    deterministic
+        Whether a repeated run gave the same outputs bit for bit (``None`` if it did not run).
+    reset_reliable
+        Whether a run after a reset equals the run on a fresh instance (``None`` if unknown).
+    horizon_s
+        Start and stop time of the runs [s].
+    message
+        What went wrong, or ``""``.
+
+    """
+
+    simulates: bool
+    deterministic: bool | None
+    reset_reliable: bool | None
+    horizon_s: tuple[float, float]
+    message: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form."""
+        return asdict(self)
+
+
+def model_health(path: Path, model: FmuModel, stop: float | None) -> ModelHealth:
+    """Run the FMU at its start values and report what the runs showed (module docstring)."""
+    t0 = 0.0
+    t1 = stop if stop is not None and stop > t0 else t0 + HORIZON
+    outputs = [n for n, v in model.outputs.items() if v.kind in USABLE["output"]]
+    inputs = {
+        n: np.full(2, 0.0 if v.start is None else float(v.start))
+        for n, v in model.inputs.items()
+        if v.kind in USABLE["input"]
+    }
+    times = np.linspace(t0, t1, SAMPLES)
+    horizon = (t0, float(t1))
+    simulator: Simulator | None = None
+    try:
+        simulator = Simulator(path, model.interface)
+        runs = [
+            simulator.simulate({}, np.array([t0, t1]), inputs, times, outputs) for _ in range(2)
+        ]
+    except FmuError as exc:
+        return ModelHealth(False, None, None, horizon, str(exc))
+    finally:
+        if simulator is not None:
+            simulator.close()
+    finite = all(bool(np.all(np.isfinite(r))) for r in runs)
+    same = bool(np.array_equal(runs[0], runs[1], equal_nan=True))
+    message = "" if finite else "non-finite outputs at the start values"
+    return ModelHealth(finite, same, simulator.reset_reliable, horizon, message)
