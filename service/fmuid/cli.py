@@ -333,8 +333,8 @@ def _parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_design)
 
     p = sub.add_parser("serve", help="run the HTTP service")
-    p.add_argument("--host", default="127.0.0.1")
-    p.add_argument("--port", type=int, default=8000)
+    p.add_argument("--host", help="listen address (default: FMUID_HOST, else 127.0.0.1)")
+    p.add_argument("--port", type=int, help="listen port (default: FMUID_PORT, else 8000)")
     p.set_defaults(func=_cmd_serve)
 
     p = sub.add_parser("demo", help="the thesis study end to end on the tractor model")

@@ -12,6 +12,12 @@ from pathlib import Path
 from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from fmuid.data.limits import InputLimits
+from fmuid.jobs.fmucheck import FmuLimits
+
+_INPUT = InputLimits()
+_FMU = FmuLimits()
+
 
 def default_data_dir() -> Path:
     """Return where jobs, uploads and results live unless ``FMUID_DATA_DIR`` says otherwise.
@@ -56,7 +62,8 @@ class Settings(BaseSettings):
         Address of a dask.distributed scheduler (``tcp://host:8786``); profile branches of
         every job then run on its workers.
     host, port
-        Where ``fmuid serve`` listens; loopback unless told otherwise.
+        Where ``fmuid serve`` listens; loopback unless told otherwise (``--host``/``--port``
+        win over them).
     queue_limit
         Jobs that may wait at once; ``POST /v1/jobs`` answers 429 past it.
     retention_s
@@ -70,6 +77,23 @@ class Settings(BaseSettings):
     warm_start
         Fork job processes from a server that imported the engine once (milliseconds per job)
         instead of starting a new interpreter per job (seconds).
+    max_csv_bytes, max_csv_rows, max_csv_columns, max_cell_chars
+        Limits of one uploaded CSV file (see :class:`fmuid.data.InputLimits`).
+    max_spec_bytes, max_spec_keys, max_spec_depth
+        Limits of the spec: size [bytes], keys of all objects together, nesting depth. The
+        size bounds a design job's experiment space too.
+    max_model_description_bytes, max_model_variables
+        Limits of an uploaded FMU's ``modelDescription.xml``: unpacked size [bytes], variables.
+    probe_timeout_s, probe_memory_mb
+        Time [s] and address space [MiB] of the process that loads an uploaded binary.
+    check_workers
+        Submissions checked at the same time, each in its own long-lived process (uploads
+        beyond that wait); nothing a submission holds is parsed in the service process.
+    check_timeout_s, check_memory_mb
+        Wall-clock time [s] and address space [MiB] of the check of one submission; its
+        process (and every process it started) is killed past either.
+    check_wait_s
+        How long a submission waits for a free checking process before it gets 503 [s].
 
     """
 
@@ -91,6 +115,21 @@ class Settings(BaseSettings):
     disk_quota_bytes: int = Field(default=0, ge=0)
     min_free_bytes: int = Field(default=100 * 1024 * 1024, ge=0)
     warm_start: bool = True
+    max_csv_bytes: int = Field(default=_INPUT.max_csv_bytes, ge=1)
+    max_csv_rows: int = Field(default=_INPUT.max_csv_rows, ge=1)
+    max_csv_columns: int = Field(default=_INPUT.max_csv_columns, ge=2)
+    max_cell_chars: int = Field(default=_INPUT.max_cell_chars, ge=1)
+    max_spec_bytes: int = Field(default=_INPUT.max_spec_bytes, ge=1)
+    max_spec_keys: int = Field(default=_INPUT.max_spec_keys, ge=1)
+    max_spec_depth: int = Field(default=_INPUT.max_spec_depth, ge=4)
+    max_model_description_bytes: int = Field(default=_FMU.max_model_description_bytes, ge=1)
+    max_model_variables: int = Field(default=_FMU.max_model_variables, ge=1)
+    probe_timeout_s: float = Field(default=_FMU.probe_timeout_s, gt=0)
+    probe_memory_mb: int = Field(default=_FMU.probe_memory_mb, ge=64)
+    check_workers: int = Field(default=2, ge=1)
+    check_timeout_s: float = Field(default=60.0, gt=0)
+    check_memory_mb: int = Field(default=2048, ge=256)
+    check_wait_s: float = Field(default=120.0, gt=0)
 
     @model_validator(mode="after")
     def _resolve_paths(self) -> Settings:
@@ -110,3 +149,27 @@ class Settings(BaseSettings):
         """The SQLite file of the job store (``db_path`` resolved)."""
         assert self.db_path is not None
         return self.db_path
+
+    @property
+    def input_limits(self) -> InputLimits:
+        """The limits of uploaded CSV files and specs."""
+        return InputLimits(
+            max_csv_bytes=self.max_csv_bytes,
+            max_csv_rows=self.max_csv_rows,
+            max_csv_columns=self.max_csv_columns,
+            max_cell_chars=self.max_cell_chars,
+            max_spec_bytes=self.max_spec_bytes,
+            max_spec_keys=self.max_spec_keys,
+            max_spec_depth=self.max_spec_depth,
+        )
+
+    @property
+    def fmu_limits(self) -> FmuLimits:
+        """The limits of the checks of an uploaded FMU."""
+        return FmuLimits(
+            max_fmu_unpacked_bytes=self.max_fmu_unpacked_bytes,
+            max_model_description_bytes=self.max_model_description_bytes,
+            max_model_variables=self.max_model_variables,
+            probe_timeout_s=self.probe_timeout_s,
+            probe_memory_mb=self.probe_memory_mb,
+        )

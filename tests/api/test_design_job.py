@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import pytest
 from api_helpers import msd_spec
 
 from fmuid.client import ApiError
+from fmuid.jobs.vet import VetTask, vet
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "design"))
 from design_cases import MSD_SPACE  # noqa: E402
@@ -37,3 +39,25 @@ def test_design_job_returns_ranked_designs_and_a_report(service, tmp_path, step_
     with pytest.raises(ApiError) as err:
         client.submit("design", spec, [], model="msd", space_path=bad)
     assert err.value.status_code == 422 and "input: 'u' is not an FMU input" in str(err.value)
+
+
+def test_design_space_is_checked_in_the_checking_process(tmp_path, msd_file):
+    """The checking process reads the space: good passes, a wrong input or an oversized file not."""
+    (tmp_path / "spec.json").write_text(msd_spec(0.02))
+    shutil.copyfile(msd_file, tmp_path / "msd.fmu")
+
+    def answer(space: str, **limits: int) -> dict:
+        (tmp_path / "space.json").write_text(space)
+        task = VetTask(str(tmp_path), [], "msd.fmu", None, 30.0, limits, space_file="space.json")
+        return vet(task)
+
+    good = json.dumps(MSD_SPACE)
+    assert answer(good) == {"ok": True, "model_name": "msd"}
+    wrong = answer(json.dumps({**MSD_SPACE, "input": "u"}))
+    assert wrong["status"] == 422 and "input: 'u' is not an FMU input" in wrong["detail"]
+    big = answer(good, max_spec_bytes=len(good) - 1)
+    assert big["status"] == 422
+    assert (
+        big["detail"]
+        == f"space: more than the limit of {len(good) - 1} bytes (FMUID_MAX_SPEC_BYTES)"
+    )

@@ -71,4 +71,7 @@ def test_exit_messages():
     message = exit_message(-11, log.getvalue(), 4096)
     assert "segmentation fault" in message and "fmi2DoStep" in message
     assert "out-of-memory" in exit_message(-9, "", 4096)
+    assert "by an operator" in exit_message(-9, "", 4096)
+    stopped = exit_message(-15, "", 4096)
+    assert "SIGTERM from outside the service" in stopped and "crashed" not in stopped
     assert "memory limit of 512 MB" in exit_message(1, "MemoryError", 512)

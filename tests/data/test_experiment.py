@@ -3,7 +3,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fmuid.data import experiment_from_arrays, load_experiment
+from fmuid.data import InputLimits, experiment_from_arrays, load_experiment
 from fmuid.errors import DataError
 
 from .helpers import write_csv
@@ -11,7 +11,7 @@ from .helpers import write_csv
 
 def load_error(tmp_path, text, **limits) -> str:
     with pytest.raises(DataError) as caught:
-        load_experiment(write_csv(tmp_path, text), **limits)
+        load_experiment(write_csv(tmp_path, text), InputLimits(**limits))
     return str(caught.value)
 
 
@@ -140,19 +140,20 @@ def test_fewer_than_two_rows(tmp_path, rows):
 
 
 def test_too_many_rows(tmp_path):
-    message = load_error(tmp_path, "time,x\n0,1\n1,2\n2,3\n", max_rows=2)
-    assert message == "step.csv: more than the limit of 2 data rows"
+    message = load_error(tmp_path, "time,x\n0,1\n1,2\n2,3\n", max_csv_rows=2)
+    assert message == "step.csv: more than the limit of 2 data rows (FMUID_MAX_CSV_ROWS)"
 
 
 def test_too_many_bytes(tmp_path):
-    message = load_error(tmp_path, "time,x\n0,1\n1,2\n", max_bytes=10)
-    assert message == "step.csv: file is larger than the limit of 10 bytes"
+    message = load_error(tmp_path, "time,x\n0,1\n1,2\n", max_csv_bytes=10)
+    assert message == "step.csv: more than the limit of 10 bytes (FMUID_MAX_CSV_BYTES)"
 
 
 def test_million_row_file_is_refused(tmp_path):
     text = "time,x\n" + "".join(f"{i},1\n" for i in range(1_000_000))
-    assert load_error(tmp_path, text) == "step.csv: more than the limit of 200000 data rows"
-    assert "limit of 5000000 bytes" in load_error(tmp_path, text, max_bytes=5_000_000)
+    expected = "step.csv: more than the limit of 200000 data rows (FMUID_MAX_CSV_ROWS)"
+    assert load_error(tmp_path, text) == expected
+    assert "limit of 5000000 bytes" in load_error(tmp_path, text, max_csv_bytes=5_000_000)
 
 
 def test_non_utf8_bytes(tmp_path):

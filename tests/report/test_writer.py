@@ -117,3 +117,13 @@ def test_profile_report_shows_each_label_reason_and_quality(tmp_path):
         "not settled: x y (2 valley checks, 8 starts, 1 lower valley, 1 re-walk)"
     )
     assert m_row[checked] == "settled"
+
+
+def test_dollar_signs_in_names_are_plain_text(tmp_path):
+    odd = "m$^$"  # mathtext cannot parse this
+    result = toy_profile_result()
+    parameters = {odd: replace(result.parameters["m"], name=odd)}
+    result = replace(result, parameters={**parameters, "k": result.parameters["k"]})
+    page = _parse(write_report(result, tmp_path / "r"))
+    assert len(page.images) == 1 + len(result.parameters)
+    assert odd in [row[0] for row in page.tables["summary"][1:]]

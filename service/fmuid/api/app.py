@@ -13,8 +13,9 @@ from fastapi.exceptions import RequestValidationError
 from fmuid.api.auth import BearerAuth
 from fmuid.api.failures import add_failure_handlers
 from fmuid.api.limits import BodyLimit
-from fmuid.api.openapi import document_errors, validation_error
+from fmuid.api.openapi import answer_options, document_errors, serve_docs, validation_error
 from fmuid.api.routers import health, jobs, reports
+from fmuid.api.vetting import VettingPool
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import JobStore
 from fmuid.jobs.worker import Supervisor
@@ -47,12 +48,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
     store = JobStore(settings.database, settings.data_dir, max_queued=settings.queue_limit)
     supervisor = Supervisor(settings, store)
+    vetting = VettingPool(
+        settings.check_workers,
+        settings.check_memory_mb,
+        settings.check_timeout_s,
+        settings.check_wait_s,
+    )
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         supervisor.start()
         logger.info("fmuid service: data in %s, %d worker(s)", settings.data_dir, settings.workers)
         yield
+        vetting.close()
         supervisor.stop()
 
     app = FastAPI(
@@ -60,6 +68,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         version="0.1.0",
         description=DESCRIPTION,
         lifespan=lifespan,
+        docs_url=None,
+        redoc_url=None,
     )
     app.state.settings = settings
     app.state.store = store
@@ -67,12 +77,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.store_health = StoreHealth(
         settings.database, settings.data_dir, settings.min_free_bytes, settings.disk_quota_bytes
     )
+    app.state.vetting = vetting
     for router in (health.router, jobs.router, reports.router):
+        answer_options(router)
         app.include_router(router)
 
     app.add_exception_handler(RequestValidationError, validation_error)
     add_failure_handlers(app)
     document_errors(app, secured=settings.api_token is not None)
+    serve_docs(app)
 
     app.add_middleware(BodyLimit, limit=settings.max_upload_bytes)
     if settings.api_token:  # added last, so it runs first: no body is read without the token

@@ -1,17 +1,30 @@
 """Bearer-token check of every ``/v1`` route but ``/v1/health``.
 
 It is ASGI middleware rather than a route dependency so that a request without the token is
-refused before its body (possibly a large upload) is read.
+refused before its body (possibly a large upload) is read. A browser cannot send the token with
+the images of a report page, so the page links them with a signature instead
+(:func:`sign`, ``?sig=``): an HMAC of the file's path under the token, which opens that one file
+and nothing else.
 """
 
 from __future__ import annotations
 
+import hashlib
+import hmac
+import re
 import secrets
+from urllib.parse import parse_qs
 
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 OPEN_PATHS = ("/v1/health",)
+_REPORT_FILE = re.compile(r"/v1/jobs/[^/]+/report/[^/]+")
+
+
+def sign(token: str, path: str) -> str:
+    """Return the signature that opens ``path`` (a report file) without the bearer token."""
+    return hmac.new(token.encode(), path.encode(), hashlib.sha256).hexdigest()[:32]
 
 
 class BearerAuth:
@@ -41,6 +54,9 @@ class BearerAuth:
         if scheme.lower() == b"bearer" and secrets.compare_digest(given.strip(), self.token):
             await self.app(scope, receive, send)
             return
+        if self._signed(scope, path):
+            await self.app(scope, receive, send)
+            return
         detail = "missing bearer token" if not header else "wrong bearer token"
         response = JSONResponse(
             {"detail": f"{detail}: send 'Authorization: Bearer <FMUID_API_TOKEN>'"},
@@ -48,3 +64,11 @@ class BearerAuth:
             headers={"WWW-Authenticate": 'Bearer realm="fmuid"'},
         )
         await response(scope, receive, send)
+
+    def _signed(self, scope: Scope, path: str) -> bool:
+        """Whether a GET of a report file carries the right ``sig``."""
+        if scope.get("method") != "GET" or not _REPORT_FILE.fullmatch(path):
+            return False
+        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        given = query.get("sig", [""])[0]
+        return secrets.compare_digest(given, sign(self.token.decode(), path))

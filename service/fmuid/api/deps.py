@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from fastapi import HTTPException, Request
 
+from fmuid.api.vetting import VettingPool
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import Job, JobStore
 from fmuid.jobs.worker import Supervisor
@@ -20,6 +21,12 @@ def get_store(request: Request) -> JobStore:
     """Return the job store."""
     store: JobStore = request.app.state.store
     return store
+
+
+def get_pool(request: Request) -> VettingPool:
+    """Return the processes that check submissions."""
+    pool: VettingPool = request.app.state.vetting
+    return pool
 
 
 def get_supervisor(request: Request) -> Supervisor:

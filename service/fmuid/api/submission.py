@@ -1,27 +1,28 @@
 """Check a job submission completely, then store its files and queue it.
 
 Everything a job needs is checked before it is queued, so a bad upload gets a 422 naming the
-problem at once instead of a failed job later: the FMU (:mod:`fmuid.jobs.fmucheck`), each CSV
-file (:func:`fmuid.data.load_experiment`), the spec (:func:`fmuid.data.spec_from_json`) and how
-they fit together (:func:`fmuid.data.check_against_model`). Uploads are written to a private
-temporary folder under their original names (experiment names come from the CSV file names) and
-move into the content-addressed blob store only once they passed.
+problem at once instead of a failed job later. Uploads are written to a private temporary folder
+under their original names (experiment names come from the CSV file names); a checking process
+(:mod:`fmuid.api.vetting`, :mod:`fmuid.jobs.vet`) then checks the FMU, each CSV file (or a
+design job's experiment space), the spec and how they fit together, so that no uploaded byte is
+parsed in the service itself; the files move into the content-addressed blob store only once
+they passed.
 """
 
 from __future__ import annotations
 
 import shutil
 import tempfile
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
-from fmuid.data import Spec, check_against_model, load_experiment, spec_from_json
+from fmuid.api.vetting import VettingPool
 from fmuid.errors import FmuidError
-from fmuid.jobs.fmucheck import check_fmu
 from fmuid.jobs.store import Dataset, Job, JobStore
+from fmuid.jobs.vet import VetTask
 from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu
-from fmuid.model.fmu import FmuModel
+from fmuid.settings import Settings
 
 MAX_NAME_LENGTH = 200
 
@@ -53,7 +54,7 @@ def safe_name(filename: str | None, field: str) -> str:
         or len(name) > MAX_NAME_LENGTH
         or any(ord(c) < 32 for c in name)
     ):
-        raise SubmissionError(422, f"{field}: {filename!r} is not an acceptable file name")
+        raise SubmissionError(422, f"{field}: {filename[:300]!r} is not an acceptable file name")
     return name
 
 
@@ -62,45 +63,49 @@ def _save(upload: Upload, target: Path) -> None:
         shutil.copyfileobj(upload.file, out, 1 << 20)
 
 
-def _load_fmu(
-    workdir: Path, fmu: Upload | None, model: str | None, max_unpacked: int
-) -> tuple[Path, FmuModel]:
+def _place_fmu(workdir: Path, fmu: Upload | None, model: str | None) -> tuple[str, str | None]:
+    """Put the FMU into ``workdir``; return its file name and its uploaded name (None: built-in)."""
     if (fmu is None) == (model is None):
         raise SubmissionError(422, "give exactly one of 'fmu' (a .fmu file) or 'model' (a name)")
     if model is not None:
         if model not in BUILTIN_MODELS:
             known = ", ".join(sorted(BUILTIN_MODELS))
-            raise SubmissionError(422, f"model: unknown built-in model {model!r}; known: {known}")
+            raise SubmissionError(
+                422, f"model: unknown built-in model {model[:100]!r}; known: {known}"
+            )
         try:
             source = builtin_fmu(model)
         except FmuidError as exc:
             raise SubmissionError(503, f"built-in model {model!r} is not available: {exc}") from exc
-        path = workdir / f"{model}.fmu"
-        shutil.copyfile(source, path)
-        return path, FmuModel(path)
+        shutil.copyfile(source, workdir / f"{model}.fmu")
+        return f"{model}.fmu", None
     assert fmu is not None
     name = safe_name(fmu.filename, "fmu")
-    path = workdir / "upload.fmu"
-    _save(fmu, path)
-    return path, check_fmu(path, name, max_unpacked)
+    _save(fmu, workdir / "upload.fmu")
+    return "upload.fmu", name
 
 
 def submit(
     store: JobStore,
+    pool: VettingPool,
+    settings: Settings,
     kind: str,
     spec: str,
     data: list[Upload],
     fmu: Upload | None,
     model: str | None,
-    max_fmu_unpacked_bytes: int,
     space: Upload | None = None,
 ) -> Job:
-    """Check a submission and queue its job.
+    """Check a submission in a checking process and queue its job (blocking).
 
     Parameters
     ----------
     store
         Where the files and the job go.
+    pool
+        The checking processes.
+    settings
+        The limits of the checks.
     kind
         ``"fit"``, ``"profile"``, ``"diagnose"`` or ``"design"``.
     spec
@@ -109,8 +114,6 @@ def submit(
         The CSV files, one per experiment.
     fmu, model
         An uploaded FMU or the name of a built-in one (exactly one of them).
-    max_fmu_unpacked_bytes
-        Largest accepted unpacked size of an uploaded FMU [bytes].
     space
         The experiment space JSON (kind ``"design"``, which takes no data).
 
@@ -122,17 +125,12 @@ def submit(
     Raises
     ------
     SubmissionError
-        With status 422 naming the problem (bad FMU, CSV, spec or a mismatch between them).
+        With status 422 naming the problem (bad FMU, CSV, spec, a mismatch between them or a
+        limit), or 503 when a built-in model is missing.
 
     """
-    try:
-        parsed_spec = spec_from_json(spec, "spec")
-    except FmuidError as exc:
-        raise SubmissionError(422, str(exc)) from exc
     if kind == "design":
-        return _submit_design(
-            store, spec, parsed_spec, data, space, fmu, model, max_fmu_unpacked_bytes
-        )
+        return _submit_design(store, pool, settings, spec, data, space, fmu, model)
     if space is not None:
         raise SubmissionError(422, f"space: only kind 'design' takes a space, not {kind!r}")
     if not data:
@@ -144,56 +142,64 @@ def submit(
     with tempfile.TemporaryDirectory(dir=store.tmp_dir()) as tmp:
         workdir = Path(tmp)
         (workdir / "data").mkdir()
+        (workdir / "spec.json").write_text(spec, encoding="utf-8", errors="replace")
         paths = [workdir / "data" / name for name in names]
         for upload, path in zip(data, paths, strict=True):
             _save(upload, path)
-        try:
-            fmu_path, fmu_model = _load_fmu(workdir, fmu, model, max_fmu_unpacked_bytes)
-            wrong_interface = fmu_model.interface_problem(parsed_spec.interface)
-            if wrong_interface:
-                raise SubmissionError(422, f"spec: interface: {wrong_interface}")
-            experiments = [load_experiment(path) for path in paths]
-            check_against_model(
-                parsed_spec,
-                fmu_model.parameters,
-                fmu_model.inputs,
-                fmu_model.outputs,
-                experiments,
-            )
-        except FmuidError as exc:
-            raise SubmissionError(422, str(exc)) from exc
-        fmu_sha = store.add_file(fmu_path)
+        fmu_file, fmu_name = _place_fmu(workdir, fmu, model)
+        answer = pool.check(_task(workdir, names, fmu_file, fmu_name, settings))
+        if not answer["ok"]:
+            raise SubmissionError(answer["status"], answer["detail"])
+        fmu_sha = store.add_file(workdir / fmu_file)
         datasets = [Dataset(name, store.add_file(path)) for name, path in zip(names, paths)]
-    return store.create(kind, spec, fmu_sha, fmu_model.model_name, datasets)
+    return store.create(kind, spec, fmu_sha, answer["model_name"], datasets)
 
 
 def _submit_design(
     store: JobStore,
+    pool: VettingPool,
+    settings: Settings,
     spec: str,
-    parsed_spec: Spec,
     data: list[Upload],
     space: Upload | None,
     fmu: Upload | None,
     model: str | None,
-    max_fmu_unpacked_bytes: int,
 ) -> Job:
     """Check and queue a design job: the space is stored as its one dataset, ``space.json``."""
-    from fmuid.design.space import check_design, space_from_json
-
     if data:
         raise SubmissionError(422, "data: kind 'design' takes a 'space' file, not data")
     if space is None:
         raise SubmissionError(422, "space: kind 'design' needs the experiment space (E.json)")
     with tempfile.TemporaryDirectory(dir=store.tmp_dir()) as tmp:
         workdir = Path(tmp)
+        (workdir / "spec.json").write_text(spec, encoding="utf-8", errors="replace")
         space_path = workdir / "space.json"
         _save(space, space_path)
-        try:
-            fmu_path, fmu_model = _load_fmu(workdir, fmu, model, max_fmu_unpacked_bytes)
-            parsed = space_from_json(space_path.read_text(errors="replace"), "space")
-            check_design(parsed, parsed_spec, fmu_model)
-        except FmuidError as exc:
-            raise SubmissionError(422, str(exc)) from exc
-        fmu_sha = store.add_file(fmu_path)
+        fmu_file, fmu_name = _place_fmu(workdir, fmu, model)
+        answer = pool.check(_task(workdir, [], fmu_file, fmu_name, settings, space_path.name))
+        if not answer["ok"]:
+            raise SubmissionError(answer["status"], answer["detail"])
+        fmu_sha = store.add_file(workdir / fmu_file)
         datasets = [Dataset("space.json", store.add_file(space_path))]
-    return store.create("design", spec, fmu_sha, fmu_model.model_name, datasets)
+    return store.create("design", spec, fmu_sha, answer["model_name"], datasets)
+
+
+def _task(
+    workdir: Path,
+    data_names: list[str],
+    fmu_file: str,
+    fmu_name: str | None,
+    settings: Settings,
+    space_file: str | None = None,
+) -> VetTask:
+    """Return the checking process's task for the files in ``workdir``, under the limits."""
+    return VetTask(
+        workdir=str(workdir),
+        data_names=data_names,
+        fmu_file=fmu_file,
+        fmu_name=fmu_name,
+        cpu_seconds=settings.check_timeout_s,
+        input_limits=asdict(settings.input_limits),
+        fmu_limits=asdict(settings.fmu_limits),
+        space_file=space_file,
+    )

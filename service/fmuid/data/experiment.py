@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from fmuid.data.limits import InputLimits, over_limit
+from fmuid.data.messages import names, quote
 from fmuid.errors import DataError
 
 __all__ = ["Experiment", "experiment_from_arrays", "load_experiment"]
@@ -27,8 +29,15 @@ __all__ = ["Experiment", "experiment_from_arrays", "load_experiment"]
 TIME = "time"
 """Name of the time column [s]."""
 
-_CELL = re.compile(r"\s*(?:[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)?\s*")
-"""A cell that is empty or holds a plain decimal number (what ``float`` reads, minus nan/inf)."""
+_CELL = re.compile(
+    r"\s*+(?:[+-]?+(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)(?:[eE][+-]?+[0-9]++)?+)?+\s*+"
+)
+"""A cell that is empty or holds a plain decimal number (what ``float`` reads, minus nan/inf).
+
+Every quantifier is possessive and the alternatives start differently, so a match never
+backtracks: its time is linear in the cell's length (the plain pattern was quadratic on a long
+run of digits followed by a letter).
+"""
 
 _NOT_A_NUMBER = {
     word
@@ -68,7 +77,7 @@ class Experiment:
 
     def _column(self, name: str) -> np.ndarray:
         if name not in self.columns:
-            raise DataError(f"{self.name}: no column '{name}' (columns: {_names(self.columns)})")
+            raise DataError(f"{self.name}: no column '{name}' (columns: {names(self.columns)})")
         return self.columns[name]
 
     def input_samples(self, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -156,9 +165,7 @@ def experiment_from_arrays(
     return _validated(name, time_array, arrays)
 
 
-def load_experiment(
-    path: str | os.PathLike[str], *, max_rows: int = 200_000, max_bytes: int = 50_000_000
-) -> Experiment:
+def load_experiment(path: str | os.PathLike[str], limits: InputLimits | None = None) -> Experiment:
     """Read and validate one experiment CSV file.
 
     Parameters
@@ -166,10 +173,9 @@ def load_experiment(
     path
         The CSV file: UTF-8 (a byte-order mark is accepted), comma-separated, a header row with a
         ``time`` column [s]. Spaces around cells and names are ignored.
-    max_rows
-        Most data rows accepted.
-    max_bytes
-        Largest file size accepted [bytes]; a larger file is refused before it is parsed.
+    limits
+        Largest size, rows, columns and cell accepted (default :class:`InputLimits`); a file
+        over one is refused before or while it is parsed.
 
     Returns
     -------
@@ -179,9 +185,11 @@ def load_experiment(
     Raises
     ------
     DataError
-        Naming the file, the row (the header is row 1) and the column at fault.
+        Naming the file, the row (the header is row 1) and the column at fault, or the limit.
 
     """
+    limits = limits or InputLimits()
+    max_bytes = limits.max_csv_bytes
     path = Path(path)
     name = path.name
     try:
@@ -192,7 +200,7 @@ def load_experiment(
     except OSError as error:
         raise DataError(f"{name}: cannot read the file ({error.strerror})") from None
     if len(raw) > max_bytes:
-        raise DataError(f"{name}: file is larger than the limit of {max_bytes} bytes")
+        raise DataError(f"{name}: {over_limit('bytes', 'max_csv_bytes', limits)}")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as error:
@@ -202,7 +210,7 @@ def load_experiment(
         ) from None
     if not text.strip():
         raise DataError(f"{name}: file is empty")
-    header, rows = _read_records(name, text, max_rows)
+    header, rows = _read_records(name, text, limits)
     return _validated(name, *_parse_table(name, header, rows))
 
 
@@ -215,7 +223,7 @@ def _place(raw: bytes, offset: int) -> str:
     return f"row {row}, column {column}"
 
 
-def _read_records(name: str, text: str, max_rows: int) -> tuple[list[str], list[list[str]]]:
+def _read_records(name: str, text: str, limits: InputLimits) -> tuple[list[str], list[list[str]]]:
     """Split the text into the header names and the data rows (trailing blank rows dropped)."""
     reader = csv.reader(io.StringIO(text, newline=""))
     records: list[list[str]] = []
@@ -223,10 +231,17 @@ def _read_records(name: str, text: str, max_rows: int) -> tuple[list[str], list[
     try:
         for record in reader:
             records.append(record)
+            if len(record) > limits.max_csv_columns:
+                what = over_limit("columns", "max_csv_columns", limits)
+                raise DataError(f"{name}: row {len(records)}: {what}")
+            if max(map(len, record), default=0) > limits.max_cell_chars:
+                widest = max(range(len(record)), key=lambda i: len(record[i])) + 1
+                what = over_limit("characters in a cell", "max_cell_chars", limits)
+                raise DataError(f"{name}: row {len(records)}, column {widest}: {what}")
             if not _is_blank(record):
                 n_data += 1
-                if n_data > max_rows + 1:
-                    raise DataError(f"{name}: more than the limit of {max_rows} data rows")
+                if n_data > limits.max_csv_rows + 1:
+                    raise DataError(f"{name}: {over_limit('data rows', 'max_csv_rows', limits)}")
     except csv.Error as error:
         raise DataError(f"{name}: row {len(records) + 1}: {error}") from None
     while records and _is_blank(records[-1]):
@@ -236,14 +251,16 @@ def _read_records(name: str, text: str, max_rows: int) -> tuple[list[str], list[
     if _is_blank(records[0]):
         raise DataError(f"{name}: row 1 is empty; the first row must be the header")
     header = [cell.strip() for cell in records[0]]
+    first: dict[str, int] = {}
     for index, column in enumerate(header):
         if not column:
             raise DataError(f"{name}: row 1: column {index + 1} has no name")
-        if header.index(column) != index:
+        if column in first:
             raise DataError(
                 f"{name}: row 1: column name '{column}' appears twice "
-                f"(columns {header.index(column) + 1} and {index + 1})"
+                f"(columns {first[column] + 1} and {index + 1})"
             )
+        first[column] = index
     if TIME not in header:
         raise DataError(f"{name}: row 1: {_missing_time(header)}")
     rows = records[1:]
@@ -264,7 +281,7 @@ def _missing_time(header: list[str]) -> str:
         return f"one column named '{header[0]}'; the delimiter must be a comma"
     close = [column for column in header if column.casefold() == TIME]
     hint = f" (found '{close[0]}'; names are case-sensitive)" if close else ""
-    return f"no 'time' column{hint}; columns: {_names(header)}"
+    return f"no 'time' column{hint}; columns: {names(header)}"
 
 
 def _parse_table(
@@ -275,7 +292,7 @@ def _parse_table(
     bad = [j for j, column in enumerate(cells) if not all(map(_CELL.fullmatch, column))]
     if bad:
         row, j = min((_first_bad_row(cells[j]), j) for j in bad)
-        text = _quote(cells[j][row].strip())
+        text = quote(cells[j][row].strip())
         raise DataError(f"{name}: row {row + 2}, column '{header[j]}': {_bad_cell(text)}")
     arrays = {}
     for column, texts in zip(header, cells, strict=True):
@@ -284,7 +301,7 @@ def _parse_table(
         if overflow.size:
             row = int(overflow[0])
             raise DataError(
-                f"{name}: row {row + 2}, column '{column}': '{_quote(texts[row].strip())}' "
+                f"{name}: row {row + 2}, column '{column}': '{quote(texts[row].strip())}' "
                 "is too large for a 64-bit float"
             )
         arrays[column] = values
@@ -344,13 +361,3 @@ def _float_array(name: str, column: str, values: ArrayLike) -> np.ndarray:
 def _is_blank(record: list[str]) -> bool:
     """Tell whether a row has no non-space character."""
     return all(not cell.strip() for cell in record)
-
-
-def _quote(text: str, limit: int = 40) -> str:
-    """Shorten a cell's text for a message."""
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def _names(names: Mapping[str, object] | list[str]) -> str:
-    """Comma-separated quoted names for messages."""
-    return ", ".join(f"'{n}'" for n in names) or "none"

@@ -32,6 +32,9 @@ _SIGNAL_NAMES: dict[int, str] = {
 }
 
 
+_KNOWN = {int(s) for s in signal.Signals}
+
+
 def fmi_call_in_traceback(log: str) -> str | None:
     """Return the FMI function running at the last fatal error in a job log, if known.
 
@@ -123,12 +126,19 @@ def exit_message(returncode: int, log: str, memory_mb: int) -> str:
         sig = -returncode
         if sig == signal.SIGKILL:
             return (
-                "the job process was killed (SIGKILL) by the system's out-of-memory killer or an"
-                f" operator; the per-job memory limit is {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
+                "the job process was killed (SIGKILL) from outside the service: by an operator"
+                " or by the system's out-of-memory killer (the system log tells which); the"
+                f" per-job memory limit is {memory_mb} MB (FMUID_JOB_MEMORY_MB)"
             )
         if sig == signal.SIGALRM:
             return "the job process was ended at its time limit (SIGALRM, FMUID_JOB_TIMEOUT_S)"
-        name = _SIGNAL_NAMES.get(sig, f"signal {sig}")
+        if sig not in _SIGNAL_NAMES:
+            what = signal.Signals(sig).name if sig in _KNOWN else f"signal {sig}"
+            return (
+                f"the job process was stopped by {what} from outside the service (an operator"
+                " or the system), not by the FMU"
+            )
+        name = _SIGNAL_NAMES[sig]
         where = fmi_call_in_traceback(log)
         place = f" in {where}" if where else " in native code"
         if _OUT_OF_MEMORY.search(log):

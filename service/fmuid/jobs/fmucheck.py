@@ -4,17 +4,25 @@ An FMU is a zip file with native code in it. Before it is stored for a job it mu
 within size limits (declared unpacked size, compression ratio, number of members), with no
 member escaping the extraction folder (absolute paths, ``..``, symbolic links), FMI 2.0 or 3.0
 with co-simulation or model exchange and a linux x86-64 binary
-(:class:`fmuid.model.fmu.FmuModel`), and that binary must load and export the FMI functions
-fmuid calls; the load is tried in a separate, memory-limited process
-(:mod:`fmuid.jobs.probe_fmu`) because loading a library runs its code.
+(:class:`fmuid.model.fmu.FmuModel`), every member intact (CRC), a ``modelDescription.xml``
+within a size and a variable-count limit, and the binary must load and export the FMI functions
+fmuid calls; the load is tried in a separate, memory- and time-limited process group
+(:mod:`fmuid.jobs.probe_fmu`) because loading a library runs its code, and the whole group is
+killed afterwards, so that nothing a binary forks outlives the check.
 """
 
 from __future__ import annotations
 
+import os
+import signal
 import stat
 import subprocess
 import sys
+import tempfile
+import xml.etree.ElementTree as ET
 import zipfile
+import zlib
+from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
 from fmuid.errors import FmuError
@@ -23,11 +31,36 @@ from fmuid.model.fmu import FmuModel
 MAX_MEMBERS = 10_000
 MAX_RATIO = 200
 """Largest accepted compression ratio of one member bigger than 1 MiB (zip-bomb guard)."""
-PROBE_TIMEOUT_S = 30.0
-PROBE_MEMORY_MB = 1024
+MODEL_DESCRIPTION = "modelDescription.xml"
 
 
-def check_archive(path: Path, name: str, max_unpacked_bytes: int) -> None:
+@dataclass(frozen=True)
+class FmuLimits:
+    """Limits of the checks of an uploaded FMU (each a ``FMUID_<NAME>`` service setting).
+
+    Attributes
+    ----------
+    max_fmu_unpacked_bytes
+        Sum of the members' unpacked sizes [bytes].
+    max_model_description_bytes
+        Unpacked size of ``modelDescription.xml`` [bytes].
+    max_model_variables
+        Variables listed in ``modelDescription.xml``.
+    probe_timeout_s
+        Wall-clock time the binary may take to load [s].
+    probe_memory_mb
+        Address space of the process that loads the binary [MiB].
+
+    """
+
+    max_fmu_unpacked_bytes: int = 200 * 1024 * 1024
+    max_model_description_bytes: int = 32 * 1024 * 1024
+    max_model_variables: int = 100_000
+    probe_timeout_s: float = 10.0
+    probe_memory_mb: int = 1024
+
+
+def check_archive(path: Path, name: str, limits: FmuLimits) -> None:
     """Check the zip structure of an FMU without unpacking it.
 
     Parameters
@@ -36,8 +69,8 @@ def check_archive(path: Path, name: str, max_unpacked_bytes: int) -> None:
         The uploaded file.
     name
         The name to quote in messages (the uploaded file name).
-    max_unpacked_bytes
-        Largest accepted sum of the members' unpacked sizes [bytes].
+    limits
+        The size limits.
 
     Raises
     ------
@@ -45,6 +78,7 @@ def check_archive(path: Path, name: str, max_unpacked_bytes: int) -> None:
         Naming the first problem found.
 
     """
+    max_unpacked_bytes = limits.max_fmu_unpacked_bytes
     if not zipfile.is_zipfile(path):
         raise FmuError(f"{name}: not a zip archive (an FMU is a zip file)")
     try:
@@ -68,8 +102,63 @@ def check_archive(path: Path, name: str, max_unpacked_bytes: int) -> None:
             f"{name}: unpacks to {total} bytes, more than the limit of {max_unpacked_bytes}"
             " (FMUID_MAX_FMU_UNPACKED_BYTES)"
         )
-    if "modelDescription.xml" not in {info.filename for info in infos}:
+    description = next((info for info in infos if info.filename == MODEL_DESCRIPTION), None)
+    if description is None:
         raise FmuError(f"{name}: no modelDescription.xml at the top of the archive")
+    if description.file_size > limits.max_model_description_bytes:
+        raise FmuError(
+            f"{name}: modelDescription.xml unpacks to {description.file_size} bytes, more than"
+            f" the limit of {limits.max_model_description_bytes}"
+            " (FMUID_MAX_MODEL_DESCRIPTION_BYTES)"
+        )
+    _check_intact(path, name)
+
+
+def _check_intact(path: Path, name: str) -> None:
+    """Unpack every member once (to nowhere) and check its CRC."""
+    try:
+        with zipfile.ZipFile(path) as zf:
+            bad = zf.testzip()
+    except (zipfile.BadZipFile, zlib.error, OSError, EOFError, NotImplementedError) as exc:
+        raise FmuError(f"{name}: a member of the archive is corrupt or unreadable: {exc}") from exc
+    if bad is not None:
+        raise FmuError(f"{name}: member {bad!r} is corrupt (its CRC-32 does not match)")
+
+
+def count_variables(path: Path, name: str, limit: int) -> int:
+    """Count the variables of ``modelDescription.xml`` by streaming it, stopping past ``limit``.
+
+    Raises
+    ------
+    FmuError
+        When the XML is not well-formed or lists more than ``limit`` variables.
+
+    """
+    count = 0
+    depth = 0
+    variables_depth = -1
+    try:
+        with zipfile.ZipFile(path) as zf, zf.open(MODEL_DESCRIPTION) as stream:
+            for event, element in ET.iterparse(stream, events=("start", "end")):
+                if event == "end":
+                    depth -= 1
+                    if depth == variables_depth:
+                        variables_depth = -1
+                    element.clear()
+                    continue
+                if depth == variables_depth + 1 and variables_depth >= 0:
+                    count += 1
+                    if count > limit:
+                        raise FmuError(
+                            f"{name}: modelDescription.xml lists more than the limit of {limit}"
+                            " variables (FMUID_MAX_MODEL_VARIABLES)"
+                        )
+                if element.tag == "ModelVariables":
+                    variables_depth = depth
+                depth += 1
+    except ET.ParseError as exc:
+        raise FmuError(f"{name}: modelDescription.xml is not well-formed XML: {exc}") from exc
+    return count
 
 
 def _check_member_name(info: zipfile.ZipInfo, name: str) -> None:
@@ -86,8 +175,11 @@ def _check_member_name(info: zipfile.ZipInfo, name: str) -> None:
         raise FmuError(f"{name}: member {member!r} is a symbolic link")
 
 
-def probe_binary(path: Path, name: str) -> None:
-    """Load the FMU's linux64 binary in a separate process and check its FMI functions.
+def probe_binary(path: Path, name: str, limits: FmuLimits) -> None:
+    """Load the FMU's linux64 binary in its own process group and check its FMI functions.
+
+    The group is killed when the probe ends, in time or not, so that whatever the binary forked
+    ends with it.
 
     Raises
     ------
@@ -96,26 +188,43 @@ def probe_binary(path: Path, name: str) -> None:
 
     """
     script = Path(__file__).with_name("probe_fmu.py")
-    try:
-        proc = subprocess.run(
-            [sys.executable, "-I", str(script), str(path), str(PROBE_MEMORY_MB)],
-            capture_output=True,
-            text=True,
-            timeout=PROBE_TIMEOUT_S,
-            start_new_session=True,
+    timeout = limits.probe_timeout_s
+    command = [sys.executable, "-I", str(script), str(path), str(limits.probe_memory_mb)]
+    with tempfile.TemporaryFile("w+") as errors:
+        proc = subprocess.Popen(
+            [*command, str(max(1, round(timeout)))],
+            stdout=subprocess.DEVNULL,
+            stderr=errors,
+            process_group=0,
         )
-    except subprocess.TimeoutExpired as exc:
-        raise FmuError(
-            f"{name}: loading its binary did not finish within {PROBE_TIMEOUT_S:.0f} s"
-        ) from exc
+        try:
+            proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired as exc:
+            raise FmuError(
+                f"{name}: loading its binary did not finish within {timeout:g} s"
+                " (FMUID_PROBE_TIMEOUT_S)"
+            ) from exc
+        finally:
+            _kill_group(proc)
+        errors.seek(0)
+        stderr = errors.read(100_000)
     if proc.returncode < 0:
         raise FmuError(f"{name}: its binary crashed while loading (signal {-proc.returncode})")
     if proc.returncode != 0:
-        reason = proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "unknown"
+        reason = stderr.strip().splitlines()[-1] if stderr.strip() else "unknown"
         raise FmuError(f"{name}: {reason}")
 
 
-def check_fmu(path: Path, name: str, max_unpacked_bytes: int) -> FmuModel:
+def _kill_group(proc: subprocess.Popen[bytes]) -> None:
+    """Kill the probe's process group (the probe and anything it forked) and reap the probe."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    proc.wait()
+
+
+def check_fmu(path: Path, name: str, limits: FmuLimits) -> FmuModel:
     """Run every check on an uploaded FMU and return the parsed model.
 
     Parameters
@@ -124,22 +233,24 @@ def check_fmu(path: Path, name: str, max_unpacked_bytes: int) -> FmuModel:
         The uploaded file.
     name
         The name to quote in messages (the uploaded file name).
-    max_unpacked_bytes
-        Largest accepted sum of the members' unpacked sizes [bytes].
+    limits
+        The limits of the checks.
 
     Raises
     ------
     FmuError
-        Naming the problem: not a zip, too big unpacked, zip bomb, a path escaping the
-        extraction folder, not FMI 2.0 or 3.0, neither co-simulation nor model exchange, no linux
-        x86-64 binary, a binary that does not load.
+        Naming the problem: not a zip, too big unpacked, zip bomb, a corrupt member, a path
+        escaping the extraction folder, a model description over its limits, not FMI 2.0 or
+        3.0, neither co-simulation nor model exchange, no linux x86-64 binary, a binary that
+        does not load.
 
     """
-    check_archive(path, name, max_unpacked_bytes)
+    check_archive(path, name, limits)
+    count_variables(path, name, limits.max_model_variables)
     try:
         model = FmuModel(path)
     except FmuError as exc:
         message = str(exc).replace(f"{path}: ", "").replace(str(path), "the upload")
         raise FmuError(f"{name}: {message}", exc.function, exc.status) from exc
-    probe_binary(path, name)
+    probe_binary(path, name, limits)
     return model

@@ -1,8 +1,9 @@
 """Load an FMU's linux binary in a throw-away process and check its FMI 2.0/3.0 functions.
 
-Run as a script (``python -I probe_fmu.py FMU MEMORY_MB``) by :mod:`fmuid.jobs.fmucheck`; it
-imports only the standard library so that it starts fast, and it limits its own memory and file
-sizes before touching the upload: loading a shared library runs its constructors, which is
+Run as a script (``python -I probe_fmu.py FMU MEMORY_MB TIMEOUT_S``) by
+:mod:`fmuid.jobs.fmucheck`, as the leader of its own process group; it imports only the standard
+library so that it starts fast, and it limits its own memory, file sizes and time (an alarm
+ends it) before touching the upload: loading a shared library runs its constructors, which is
 native code from the uploader. Exit status 0 when the binary loads and exports every function
 below; otherwise 1 with one line on stderr saying why.
 """
@@ -13,6 +14,7 @@ import ctypes
 import re
 import resource
 import shutil
+import signal
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
@@ -77,7 +79,8 @@ def _probe(fmu: Path, workdir: Path) -> str | None:
 
 
 def main(argv: list[str]) -> int:
-    """Probe the FMU ``argv[1]`` within ``argv[2]`` MiB of address space."""
+    """Probe the FMU ``argv[1]`` within ``argv[2]`` MiB of address space and ``argv[3]`` s."""
+    signal.alarm(int(argv[3]))
     limit = int(argv[2]) * 1024 * 1024
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))

@@ -7,6 +7,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import matplotlib
 from matplotlib.figure import Figure
 
 from fmuid.errors import FmuidError
@@ -80,18 +81,19 @@ def write_report(
         from fmuid.fit.problem import Problem
 
         problem = Problem(fmu, experiments, spec)
-    if isinstance(result, ProfileResult):
-        page = HtmlPage(Path(directory), f"Profile likelihood: {result.fit.model_name}")
-        _profile_sections(page, result, problem)
-    elif isinstance(result, FitResult):
-        page = HtmlPage(Path(directory), f"Fit: {result.model_name}")
-        _fit_sections(page, result, problem)
-    else:
-        page = HtmlPage(Path(directory), "Model discrepancy diagnosis")
-        diagnosis_sections(page, result, problem)
-    for caption, fig in (extra_figures or {}).items():
-        page.figure(fig, f"extra_{caption}", caption)
-    return page.write()
+    with matplotlib.rc_context({"text.parse_math": False}):  # a '$' in a name is text
+        if isinstance(result, ProfileResult):
+            page = HtmlPage(Path(directory), f"Profile likelihood: {result.fit.model_name}")
+            _profile_sections(page, result, problem)
+        elif isinstance(result, FitResult):
+            page = HtmlPage(Path(directory), f"Fit: {result.model_name}")
+            _fit_sections(page, result, problem)
+        else:
+            page = HtmlPage(Path(directory), "Model discrepancy diagnosis")
+            diagnosis_sections(page, result, problem)
+        for caption, fig in (extra_figures or {}).items():
+            page.figure(fig, f"extra_{caption}", caption)
+        return page.write()
 
 
 def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | None) -> None:

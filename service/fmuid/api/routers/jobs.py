@@ -4,11 +4,21 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
+import anyio.to_thread
 from fastapi import APIRouter, Depends, File, Form, HTTPException, Query, Response, UploadFile
 
-from fmuid.api.deps import get_job, get_settings, get_store, get_store_health, get_supervisor
+from fmuid.api.deps import (
+    get_job,
+    get_pool,
+    get_settings,
+    get_store,
+    get_store_health,
+    get_supervisor,
+)
+from fmuid.api.results import ResultOut
 from fmuid.api.schemas import ErrorOut, JobCreated, JobList, JobOut, Kind
 from fmuid.api.submission import SubmissionError, Upload, submit
+from fmuid.api.vetting import PoolBusy, VettingPool
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.housekeeping import delete_jobs
 from fmuid.jobs.store import FINAL_STATUSES, Job, JobStore, QueueFull
@@ -30,15 +40,23 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
     status_code=202,
     response_model=JobCreated,
     responses={
+        400: {"model": ErrorOut, "description": "The multipart body cannot be parsed."},
         401: _ERRORS[401],
         413: {"model": ErrorOut, "description": "The request body exceeds the upload limit."},
-        422: {"description": "Bad FMU, CSV or spec, or they do not fit together."},
+        422: {
+            "description": "Bad FMU, CSV or spec, or they do not fit together, or one is over a"
+            " limit (the reason names it and its FMUID_* setting)."
+        },
         429: {"model": ErrorOut, "description": "The queue is full (FMUID_QUEUE_LIMIT)."},
-        503: {"model": ErrorOut, "description": "The named built-in model is not built."},
+        503: {
+            "model": ErrorOut,
+            "description": "The named built-in model is not built, or every checking process"
+            " stayed busy for FMUID_CHECK_WAIT_S.",
+        },
         507: {"model": ErrorOut, "description": "The disk is full or the data over its quota."},
     },
 )
-def create_job(
+async def create_job(
     kind: Annotated[Kind, Form(description="What to compute.")],
     spec: Annotated[str, Form(description="The study specification (JSON text).")],
     data: Annotated[
@@ -49,40 +67,52 @@ def create_job(
     settings: Annotated[Settings, Depends(get_settings)],
     supervisor: Annotated[Supervisor, Depends(get_supervisor)],
     checks: Annotated[StoreHealth, Depends(get_store_health)],
+    pool: Annotated[VettingPool, Depends(get_pool)],
     space: Annotated[
         UploadFile | None, File(description="Experiment space JSON (kind 'design' only).")
     ] = None,
-    fmu: Annotated[UploadFile | None, File(description="An FMI 2.0 co-simulation FMU.")] = None,
+    fmu: Annotated[
+        UploadFile | None, File(description="An FMI 2.0/3.0 FMU (co-simulation or model exchange).")
+    ] = None,
     model: Annotated[
         str | None, Form(description="Name of a built-in FMU, instead of 'fmu'.")
     ] = None,
 ) -> JobCreated:
-    """Check the inputs and queue a job; its id comes back at once (202)."""
-    no_room = checks.room_problems()
-    if no_room:
-        raise HTTPException(status_code=507, detail="; ".join(no_room))
-    queued = store.counts()["queued"]
-    if queued >= settings.queue_limit:
-        raise HTTPException(
-            status_code=429, detail=f"the queue is full: {queued} jobs wait (FMUID_QUEUE_LIMIT)"
-        )
+    """Check the inputs (in a checking process) and queue a job; its id comes back (202)."""
+    await anyio.to_thread.run_sync(_check_room, checks, store, settings.queue_limit)
     try:
-        job = submit(
+        job = await pool.run(
+            submit,
             store,
+            pool,
+            settings,
             kind,
             spec,
             [Upload(d.filename, d.file) for d in data or []],
             Upload(fmu.filename, fmu.file) if fmu is not None else None,
             model or None,
-            settings.max_fmu_unpacked_bytes,
-            space=Upload(space.filename, space.file) if space is not None else None,
+            Upload(space.filename, space.file) if space is not None else None,
         )
     except SubmissionError as exc:
         raise HTTPException(status_code=exc.status_code, detail=str(exc)) from exc
     except QueueFull as exc:
         raise HTTPException(status_code=429, detail=str(exc)) from exc
+    except PoolBusy as exc:
+        raise HTTPException(status_code=503, detail=str(exc)) from exc
     supervisor.wake()
     return JobCreated(id=job.id)
+
+
+def _check_room(checks: StoreHealth, store: JobStore, queue_limit: int) -> None:
+    """Answer 507 when the disk has no room for a job, 429 when the queue is full."""
+    no_room = checks.room_problems()
+    if no_room:
+        raise HTTPException(status_code=507, detail="; ".join(no_room))
+    queued = store.counts()["queued"]
+    if queued >= queue_limit:
+        raise HTTPException(
+            status_code=429, detail=f"the queue is full: {queued} jobs wait (FMUID_QUEUE_LIMIT)"
+        )
 
 
 @router.get("", response_model=JobList, responses={401: _ERRORS[401]})
@@ -105,10 +135,7 @@ def get_job_status(job: Annotated[Job, Depends(get_job)]) -> JobOut:
     "/{job_id}/result",
     responses={
         **_ERRORS,
-        200: {
-            "description": "The result JSON of the job's kind.",
-            "content": {"application/json": {"schema": {"type": "object"}}},
-        },
+        200: {"model": ResultOut, "description": "The result JSON of the job's kind."},
         409: {"model": ErrorOut, "description": "The job is not done."},
     },
 )

@@ -3,7 +3,8 @@
 The job process writes the report (``<data_dir>/reports/<id>/index.html`` and PNGs) right after
 storing the result; here it is only served (after waiting while it is still being drawn). The
 page gets ``<base href="report/">`` so that its relative image links resolve under
-``/v1/jobs/{id}/report/``.
+``/v1/jobs/{id}/report/``; with ``FMUID_API_TOKEN`` set, each such link carries a signature that
+opens that file in a browser (:func:`fmuid.api.auth.sign`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException
 from fastapi.responses import FileResponse, HTMLResponse
 
+from fmuid.api.auth import sign
 from fmuid.api.deps import get_job, get_settings
 from fmuid.api.schemas import ErrorOut
 from fmuid.jobs.store import Job
@@ -26,6 +28,10 @@ router = APIRouter(prefix="/v1/jobs", tags=["reports"])
 REPORT_WAIT_S = 60.0
 """The result is stored before the report is drawn: a report asked for meanwhile waits this long."""
 _FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
+_LINK = re.compile(r'\b(src|href)="([A-Za-z0-9_][A-Za-z0-9_.-]*)"')
+"""A link to a file beside the page (which gets a signature when a token is set)."""
+MAX_FILE_NAME = 255
+"""Longest file name the file system takes; a longer one is simply not in the report."""
 _RESPONSES: dict[int | str, dict[str, Any]] = {
     401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
     404: {"model": ErrorOut, "description": "No such job or file."},
@@ -72,6 +78,11 @@ def get_report(
     base = '<base href="report/">'
     head = re.search(r"<head[^>]*>", html, flags=re.IGNORECASE)
     html = html[: head.end()] + base + html[head.end() :] if head else base + html
+    if settings.api_token:
+        prefix = f"/v1/jobs/{job.id}/report/"
+        html = _LINK.sub(
+            lambda m: f'{m[1]}="{m[2]}?sig={sign(settings.api_token or "", prefix + m[2])}"', html
+        )
     return HTMLResponse(html)
 
 
@@ -91,6 +102,6 @@ def get_report_file(
     """Give one file of a job's report (an image the page links)."""
     directory = _report_dir(job, settings)
     path = directory / file_name
-    if not _FILE_NAME.fullmatch(file_name) or not path.is_file():
-        raise HTTPException(status_code=404, detail=f"no file {file_name!r} in the report")
+    if len(file_name) > MAX_FILE_NAME or not _FILE_NAME.fullmatch(file_name) or not path.is_file():
+        raise HTTPException(status_code=404, detail=f"no file {file_name[:80]!r} in the report")
     return FileResponse(path)
