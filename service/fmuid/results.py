@@ -246,7 +246,8 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
     )
 
 
-def _pandas() -> Any:
+def pandas_module() -> Any:
+    """Return pandas, or raise an ImportError that says how to install it."""
     try:
         import pandas
     except ImportError as exc:
@@ -271,7 +272,7 @@ def to_frame(result: FitResult | ProfileResult | Diagnosis) -> Any:
         If pandas is not installed (the message says how to install it).
 
     """
-    pd = _pandas()
+    pd = pandas_module()
     if isinstance(result, ProfileResult):
         rows = {
             n: _profile_row(p, result.fit.units.get(n, "")) for n, p in result.parameters.items()

@@ -6,8 +6,6 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-import pandas as pd
-
 from fmuid.design.signals import Trial
 from fmuid.design.verify import Verification
 from fmuid.fit.result import Cost
@@ -116,8 +114,16 @@ class DesignResult:
             },
         }
 
-    def to_frame(self) -> pd.DataFrame:
-        """Return one row per design: settings, score, predicted widths, verified counts."""
+    def to_frame(self) -> Any:
+        """Return one row per design: settings, score, predicted widths, verified counts.
+
+        Raises
+        ------
+        ImportError
+            If pandas is not installed (the ``report`` extra).
+        """
+        from fmuid.results import pandas_module
+
         rows = []
         for rank, d in enumerate(self.designs, 1):
             row: dict[str, Any] = {
@@ -131,7 +137,7 @@ class DesignResult:
                 if d.verified is not None:
                     row[f"{n} verified"] = f"{d.verified.identifiable[n]}/{d.verified.draws}"
             rows.append(row)
-        return pd.DataFrame(rows)
+        return pandas_module().DataFrame(rows)
 
 
 def _num(v: Any) -> float | None:
