@@ -37,7 +37,7 @@ from fmuid.diagnose.correction import arx_correction
 from fmuid.diagnose.generic import generic_test
 from fmuid.diagnose.knowledge import AddedParameter
 from fmuid.diagnose.result import AddedEstimate, CandidateScore, Diagnosis
-from fmuid.diagnose.scan import CandidateFit, Scanner, augmented, scan
+from fmuid.diagnose.scan import CandidateFit, Scanner, augmented, scan, sensitivity_basis
 from fmuid.fit.optimize import (
     FitOptions,
     fit_problem,
@@ -196,7 +196,7 @@ def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestRes
     """Residual tests of an augmented fit and the generic error-model test on top of it."""
     tests = locate.residual_tests(problem, fit)
     residuals = safe_residuals(problem, fit.z_estimate())
-    generic, _ = generic_test(problem, residuals, fit.jacobian, seed)
+    generic, _ = generic_test(problem, residuals, sensitivity_basis(fit.jacobian), seed)
     return [*tests, generic] if generic else tests
 
 
@@ -263,7 +263,7 @@ def diagnose_problem(
     fit, scanner, fits, adjusted = _scan_base(run, fit, cands)
     tests_before = locate.residual_tests(problem, fit)
     agreement = locate.experiments_disagree(problem, fit, opts.agreement_nfev)
-    generic, pole = generic_test(problem, scanner.r0, fit.jacobian, problem.spec.seed)
+    generic, pole = generic_test(problem, scanner.r0, scanner.basis, problem.spec.seed)
     run.report("residual tests, the experiments' agreement and the generic error model")
     k_best = int(np.argmin(adjusted))
     scan_test = rt.TestResult(

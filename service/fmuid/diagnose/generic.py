@@ -105,10 +105,11 @@ def regressors(problem: Problem, pole_hz: float) -> np.ndarray:
     return np.vstack(rows)
 
 
-def blocks(problem: Problem, residuals: np.ndarray, jacobian: np.ndarray) -> list[Block]:
-    """Score statistic of the error model at every pole of the bank."""
-    u, s, _ = np.linalg.svd(np.asarray(jacobian, dtype=float), full_matrices=False)
-    basis = u[:, s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
+def blocks(problem: Problem, residuals: np.ndarray, basis: np.ndarray) -> list[Block]:
+    """Score statistic of the error model at every pole of the bank.
+
+    ``basis`` spans the fit's weighted sensitivities (:func:`.scan.sensitivity_basis`).
+    """
     r = np.asarray(residuals, dtype=float)
     out = []
     for pole in poles_hz(problem):
@@ -125,7 +126,7 @@ def blocks(problem: Problem, residuals: np.ndarray, jacobian: np.ndarray) -> lis
 
 
 def generic_test(
-    problem: Problem, residuals: np.ndarray, jacobian: np.ndarray, seed: int
+    problem: Problem, residuals: np.ndarray, basis: np.ndarray, seed: int
 ) -> tuple[TestResult | None, Block | None]:
     """Return the generic error-model test of a fit and the pole of its smallest p-value.
 
@@ -133,7 +134,7 @@ def generic_test(
     """
     if not problem.inputs:
         return None, None
-    bank = blocks(problem, residuals, jacobian)
+    bank = blocks(problem, residuals, basis)
     if not bank:
         return None, None
     adjusted = min_p(bank, seed)

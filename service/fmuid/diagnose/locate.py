@@ -13,22 +13,27 @@ from fmuid.fit.optimize import FitOptions, refine
 from fmuid.fit.predictor import merged_inputs
 from fmuid.fit.problem import Problem
 from fmuid.fit.result import FitResult
+from fmuid.fit.series import residual_series as fit_series
 
 
-def residual_series(problem: Problem, values: dict[str, float]) -> list[rt.Series]:
-    """Weighted residuals of every experiment and output at ``values``, with the inputs."""
-    predictions = problem.predict(values)
+def residual_series(
+    problem: Problem,
+    values: dict[str, float],
+    predictions: list[dict[str, np.ndarray]] | None = None,
+) -> list[rt.Series]:
+    """Weighted residuals of every experiment and output at ``values``, with the inputs.
+
+    ``predictions`` (``problem.predict(values)``) is used when given instead of simulating.
+    Series of fewer than two samples are left out (no test can use them).
+    """
+    inputs = {exp.name: merged_inputs(exp, problem.inputs) for exp in problem.experiments}
     out = []
-    for i, exp in enumerate(problem.experiments):
-        input_time, inputs = merged_inputs(exp, problem.inputs)
-        for j, output in enumerate(problem.outputs):
-            mask = problem.masks[i][j]
-            if mask.sum() < 2:
-                continue
-            t = exp.time[mask]
-            r = (problem.data[i][j] - predictions[i][output][mask]) / problem.sigma[i][output][mask]
-            u = {name: np.interp(t, input_time, v) for name, v in inputs.items()}
-            out.append(rt.Series(exp.name, output, t, r, u))
+    for s in fit_series(problem, values, predictions):
+        if len(s.time) < 2:
+            continue
+        input_time, input_values = inputs[s.experiment]
+        u = {name: np.interp(s.time, input_time, v) for name, v in input_values.items()}
+        out.append(rt.Series(s.experiment, s.output, s.time, s.weighted, u))
     return out
 
 

@@ -111,6 +111,12 @@ def null_p_value(statistic: float, df: int, one_sided: bool) -> float:
     return float(stats.chi2.sf(max(statistic, 0.0), df))
 
 
+def sensitivity_basis(jacobian: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of what a move of the fitted parameters reproduces (columns)."""
+    u, s, _ = np.linalg.svd(np.asarray(jacobian, dtype=float), full_matrices=False)
+    return u[:, s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
+
+
 def augmented(root: Problem, candidates: Sequence[Candidate], confidence: float) -> Problem:
     """Return the root problem with the candidates' parameters added and wrappers applied."""
     params = dict(root.parameter_specs)
@@ -184,8 +190,7 @@ class Scanner:
         self.r0 = safe_residuals(problem, self.z)
         self.chi2 = float(self.r0 @ self.r0)
         self.jac = np.asarray(jacobian, dtype=float)
-        u, s, _ = np.linalg.svd(self.jac, full_matrices=False)
-        self.basis = u[:, s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
+        self.basis = sensitivity_basis(self.jac)
         self.confidence = confidence
 
     def project(self, v: np.ndarray) -> np.ndarray:

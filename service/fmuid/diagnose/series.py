@@ -75,10 +75,11 @@ def diagnosis_series(
     after = problem_after or augmented_problem_of(problem_before, diagnosis)
     before_values = {n: diagnosis.parameters_before[n] for n in problem_before.names}
     after_values = {n: diagnosis.parameters_after[n] for n in after.names}
+    y_before, y_after = problem_before.predict(before_values), after.predict(after_values)
     return DiagnosisSeries(
         problem_before,
-        problem_before.predict(before_values),
-        after.predict(after_values),
-        residual_series(problem_before, before_values),
-        residual_series(after, after_values),
+        y_before,
+        y_after,
+        residual_series(problem_before, before_values, y_before),
+        residual_series(after, after_values, y_after),
     )

@@ -38,7 +38,11 @@ class ResidualSeries:
     unit: str = ""
 
 
-def residual_series(problem: Problem, values: Mapping[str, float]) -> list[ResidualSeries]:
+def residual_series(
+    problem: Problem,
+    values: Mapping[str, float],
+    predictions: list[dict[str, np.ndarray]] | None = None,
+) -> list[ResidualSeries]:
     """Simulate at ``values`` and pair the model with the data of every fitted output.
 
     Parameters
@@ -47,6 +51,8 @@ def residual_series(problem: Problem, values: Mapping[str, float]) -> list[Resid
         The fitting problem (experiments, sigma, predictions).
     values
         Free parameter values (parameter units).
+    predictions
+        ``problem.predict(values)`` when the caller has it already (not simulated again).
 
     Returns
     -------
@@ -55,7 +61,7 @@ def residual_series(problem: Problem, values: Mapping[str, float]) -> list[Resid
 
     """
     out = []
-    predicted = problem.predict(values)
+    predicted = problem.predict(values) if predictions is None else predictions
     for i, (exp, model) in enumerate(zip(problem.experiments, predicted, strict=True)):
         for j, output in enumerate(problem.outputs):
             mask = problem.masks[i][j]
