@@ -17,8 +17,8 @@ from scipy import stats
 
 import fieldtruth as ft
 from fmuid.diagnose import DiagnoseOptions, diagnose
-from fmuid.diagnose.plots import figures
 from fmuid.diagnose.series import diagnosis_series
+from fmuid.plots import diagnosis_figures
 from fmuid.stages import make_problem
 from operational import study_spec
 
@@ -109,7 +109,7 @@ def test_concealed_effect_is_found_named_and_sized(
         lo_b, hi_b = entry["before"]["ci"]
         assert lo_b is None or lo_b <= entry["before"]["estimate"] <= (hi_b or np.inf)
     problem = make_problem(tractor_fmu, case.experiments, study_spec())
-    figs = figures(diagnosis, diagnosis_series(diagnosis, problem))
+    figs = diagnosis_figures(diagnosis, diagnosis_series(diagnosis, problem))
     assert set(figs) == {"fit", "residuals", "spectrum"}
 
 

@@ -75,11 +75,11 @@ def test_profile_into_a_given_ax_draws_one_parameter_with_its_unit(profile_resul
     assert [line.get_gid() for line in other.lines if line.get_gid()] == ["path_m"]
 
 
-def test_profile_into_an_ax_needs_one_parameter(profile_result):
+def test_profile_into_an_ax_needs_one_axes_per_parameter(profile_result):
     import pytest
 
     ax = Figure().subplots()
-    with pytest.raises(ValueError, match="name"):
+    with pytest.raises(ValueError, match="exactly 2 Axes"):
         profile_figure(profile_result, ax=ax)
     with pytest.raises(KeyError, match="profiled: m, k"):
         profile_figure(profile_result, "q")

@@ -1,68 +1,12 @@
-"""Report page and figures of a design study and of a discrimination proposal."""
+"""Report page of a design study (its figures are in :mod:`fmuid.plots.design`)."""
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
-import numpy as np
-from matplotlib.axes import Axes
-from matplotlib.figure import Figure
-
-from fmuid.design.discriminate import Discrimination
 from fmuid.design.result import DesignResult
-from fmuid.design.signals import input_signal
+from fmuid.plots.design import widths_figure
 from fmuid.report.page import HtmlPage, interval
-
-
-def widths_figure(result: DesignResult, ax: Axes | None = None, top: int = 4) -> Figure:
-    """Predicted (Fisher) and verified (profile median) interval widths of the best designs."""
-    fig: Any
-    if ax is None:
-        fig = Figure(figsize=(8, 4), layout="constrained")
-        ax = fig.add_subplot()
-    else:
-        fig = ax.figure
-    names = list(result.best.predicted)
-    designs = result.designs[:top]
-    width = 0.8 / max(len(designs), 1)
-    x = np.arange(len(names))
-    for k, d in enumerate(designs):
-        pred = [d.predicted[n].get("width_z", np.nan) for n in names]
-        ax.bar(
-            x + k * width,
-            pred,
-            width,
-            label=f"#{k + 1} {d.trial.family}, {d.trial.rate_hz:g} Hz, "
-            f"{len(d.trial.outputs)} sensors",
-        )
-        if d.verified is not None:
-            ver = [d.verified.median_width(n) for n in names]
-            ax.plot(x + k * width, ver, "x", color="black")
-    ax.set_xticks(x + 0.4 - width / 2, names)
-    ax.set_yscale("log")
-    ax.set_ylabel("simultaneous CI width [decades]")
-    ax.set_title("bars: Fisher prediction, x: profile median")
-    ax.legend(fontsize="small")
-    return fig
-
-
-def discrimination_figure(result: Discrimination, ax: Axes | None = None) -> Figure:
-    """Plot the proposed test's input and both hypotheses' noise-free predictions."""
-    outputs = list(result.trial.outputs)
-    fig = Figure(figsize=(8, 2.2 * (len(outputs) + 1)), layout="constrained")
-    axes = fig.subplots(len(outputs) + 1, 1, sharex=True)
-    t_in, u = input_signal(result.trial)
-    axes[0].plot(t_in, u, "k-")
-    axes[0].set_ylabel(result.input_name)
-    axes[0].set_title(f"{result.trial.label}: expected chi2 separation {result.expected_chi2:.3g}")
-    for a, o in zip(axes[1:], outputs, strict=True):
-        for name, pred in result.predictions.items():
-            a.plot(result.time, pred[o], label=name)
-        a.set_ylabel(o)
-        a.legend(fontsize="small")
-    axes[-1].set_xlabel("time [s]")
-    return fig
 
 
 def write_design_report(result: DesignResult, directory: Path) -> Path:

@@ -1,7 +1,7 @@
 """What the diagnosis figures draw: model outputs and weighted residuals before and after.
 
-The figures only draw (:mod:`.plots`); this stage simulates the base and the augmented model
-at the diagnosis' parameter values once and hands the series over.
+The figures only draw (:mod:`fmuid.plots.diagnosis`); this stage simulates the base and the
+augmented model at the diagnosis' parameter values once and hands the series over.
 """
 
 from __future__ import annotations

@@ -1,8 +1,15 @@
 """Matplotlib figures drawn from fmuid results; every function returns a ``Figure``.
 
 Plot functions never simulate: they draw results and the data objects that the engine makes
-(``fmuid.fit.series.residual_series``, ``fmuid.profile.band.trajectory_band``). Single-panel
-plots take ``ax=`` to draw into a given ``matplotlib`` axes.
+(``fmuid.fit.series.residual_series``, ``fmuid.profile.band.trajectory_band``,
+``fmuid.diagnose.series.diagnosis_series``; a discrimination proposal carries its predictions).
+
+Every function takes ``ax=``: by default it draws a new figure; given axes, it draws into them
+and returns the figure that holds them. A one-panel plot takes one ``Axes``; a plot of several
+panels takes a sequence or array of ``Axes`` with exactly one per panel, flattened row by row
+(so ``fig.subplots(rows, cols)`` or ``subfig.subplots(...)`` can be passed as it is). Each
+docstring says how many panels and in which order; a wrong count is a ``ValueError`` naming the
+number needed. A figure of its own gets a title; given axes keep the caller's figure title.
 
 The figures follow the thesis: profile likelihoods (Figs 2.8, 3.3), parameter paths along a
 profile (Fig 2.9), confidence-interval compilations (Figs 3.4, 3.9, 3.10), trajectory bands
@@ -11,6 +18,13 @@ built on ``matplotlib.figure.Figure`` directly (Agg canvas, no pyplot state) and
 """
 
 from fmuid.plots.compilation import CiEntry, ci_compilation_figure, ci_entries_from_profile
+from fmuid.plots.design import discrimination_figure, widths_figure
+from fmuid.plots.diagnosis import (
+    diagnosis_figures,
+    diagnosis_fit_figure,
+    diagnosis_residual_figure,
+    diagnosis_spectrum_figure,
+)
 from fmuid.plots.fit import fit_figure
 from fmuid.plots.profile import parameter_paths_figure, profile_figure
 from fmuid.plots.trajectory import trajectory_band_figure
@@ -19,8 +33,14 @@ __all__ = [
     "CiEntry",
     "ci_compilation_figure",
     "ci_entries_from_profile",
+    "diagnosis_figures",
+    "diagnosis_fit_figure",
+    "diagnosis_residual_figure",
+    "diagnosis_spectrum_figure",
+    "discrimination_figure",
     "fit_figure",
     "parameter_paths_figure",
     "profile_figure",
     "trajectory_band_figure",
+    "widths_figure",
 ]

@@ -3,9 +3,15 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import TypeAlias
 
+import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+
+AxesArg: TypeAlias = Axes | Sequence[Axes] | np.ndarray | None
+"""What ``ax=`` takes: one Axes, or a sequence or array of Axes (flattened row by row)."""
 
 PROFILE_COLOR = "black"
 QUADRATIC_COLOR = "0.6"
@@ -44,6 +50,57 @@ def new_figure(
     for ax in axes[n_panels:]:
         ax.set_visible(False)
     return fig, axes[:n_panels]
+
+
+def panels(
+    ax: AxesArg,
+    n_panels: int,
+    what: str,
+    *,
+    ncols: int = 3,
+    panel_size: tuple[float, float] = (4.0, 3.0),
+) -> tuple[Figure, list[Axes], bool]:
+    """Return the figure and the axes to draw ``n_panels`` panels into.
+
+    Parameters
+    ----------
+    ax
+        ``None`` for a new figure (see :func:`new_figure`), else the caller's axes: one
+        ``Axes`` or a sequence or array of them (e.g. from ``plt.subplots``), flattened row by
+        row, exactly one per panel.
+    n_panels
+        Number of panels the plot draws.
+    what
+        The panels, for the error message, e.g. ``"fit_figure: 4 per residual series"``.
+    ncols, panel_size
+        Layout of a new figure.
+
+    Returns
+    -------
+    tuple
+        The figure (the top-level one holding the caller's axes), the axes in panel order, and
+        whether the figure is new (only a new figure gets a title of its own).
+
+    Raises
+    ------
+    ValueError
+        If the number of axes given is not ``n_panels``; the message names the number needed.
+    TypeError
+        If ``ax`` holds something that is not a matplotlib ``Axes``.
+
+    """
+    if ax is None:
+        fig, axes = new_figure(n_panels, ncols=ncols, panel_size=panel_size)
+        return fig, axes, True
+    given = [ax] if isinstance(ax, Axes) else list(np.asarray(ax, dtype=object).ravel())
+    wrong = [type(a).__name__ for a in given if not isinstance(a, Axes)]
+    if wrong:
+        raise TypeError(
+            f"ax= takes matplotlib Axes (one, or a sequence or array of them), got {wrong[0]}"
+        )
+    if len(given) != n_panels:
+        raise ValueError(f"ax= needs exactly {n_panels} Axes here ({what}), got {len(given)}")
+    return figure_of(given[0]), given, False
 
 
 def to_plot_coordinate(value: float, scale: str) -> float:

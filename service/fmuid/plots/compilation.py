@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from fmuid.plots._common import new_figure
+from fmuid.plots._common import AxesArg, panels
 from fmuid.profile.result import ProfileResult
 
 BAR_COLOR = "tab:red"
@@ -102,7 +102,11 @@ def ci_entries_from_profile(
 
 
 def ci_compilation_figure(
-    entries: Sequence[CiEntry], *, ncols: int = 3, title: str | None = None
+    entries: Sequence[CiEntry],
+    *,
+    ax: AxesArg = None,
+    ncols: int = 3,
+    title: str | None = None,
 ) -> Figure:
     """Draw confidence-interval bars of many studies, one panel per parameter.
 
@@ -116,23 +120,34 @@ def ci_compilation_figure(
     ----------
     entries
         The bars, in drawing order (top to bottom within a group).
+    ax
+        Draw into these axes instead of a new figure: one per distinct ``parameter``, in order
+        of first appearance.
     ncols
-        Panels per row.
+        Panels per row of a new figure.
     title
-        Figure title.
+        Figure title (set on the figure holding ``ax`` too when given).
 
     Returns
     -------
     Figure
-        One panel per distinct ``parameter`` in ``entries``, in order of first appearance.
+        One panel per distinct ``parameter`` in ``entries``, in order of first appearance (the
+        figure holding ``ax`` when given).
+
+    Raises
+    ------
+    ValueError
+        If ``ax`` does not hold one axes per parameter.
 
     """
     params = list(dict.fromkeys(e.parameter for e in entries))
-    fig, axes = new_figure(len(params), ncols=ncols, panel_size=(4.2, 0.35 * _rows(entries) + 1.2))
-    for ax, name in zip(axes, params, strict=True):
-        panel = [e for e in entries if e.parameter == name]
-        _draw_panel(ax, panel)
-        ax.set_title(f"{name} [{panel[0].unit}]" if panel[0].unit else name)
+    what = f"ci_compilation_figure: one per parameter, {', '.join(params) or 'none'}"
+    size = (4.2, 0.35 * _rows(entries) + 1.2)
+    fig, axes, _ = panels(ax, len(params), what, ncols=ncols, panel_size=size)
+    for panel, name in zip(axes, params, strict=True):
+        bars = [e for e in entries if e.parameter == name]
+        _draw_panel(panel, bars)
+        panel.set_title(f"{name} [{bars[0].unit}]" if bars[0].unit else name)
     if title:
         fig.suptitle(title)
     return fig

@@ -9,10 +9,12 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from fmuid.fit.series import ResidualSeries
-from fmuid.plots._common import DATA_COLOR, MODEL_COLOR, unit_label
+from fmuid.plots._common import DATA_COLOR, MODEL_COLOR, AxesArg, panels, unit_label
+
+PANELS_PER_SERIES = 4
 
 
-def fit_figure(series: Sequence[ResidualSeries]) -> Figure:
+def fit_figure(series: Sequence[ResidualSeries], *, ax: AxesArg = None) -> Figure:
     """Draw data against the fitted model and the weighted residuals' diagnostics.
 
     One row per experiment and fitted output with four panels: the time history (data as
@@ -25,17 +27,27 @@ def fit_figure(series: Sequence[ResidualSeries]) -> Figure:
     series
         Data and model of each experiment and output:
         ``fmuid.fit.series.residual_series(problem, fit.estimates)``.
+    ax
+        Draw into these axes instead of a new figure: ``4 * len(series)`` of them, in the
+        order above (time history, residuals, Q-Q, histogram of the first series, then of the
+        next), e.g. ``plt.subplots(len(series), 4)[1]``.
 
     Returns
     -------
     Figure
-        ``4 * len(series)`` panels.
+        ``4 * len(series)`` panels (the figure holding ``ax`` when given).
+
+    Raises
+    ------
+    ValueError
+        If ``ax`` does not hold ``4 * len(series)`` axes.
 
     """
-    fig = Figure(figsize=(14.0, 2.8 * max(1, len(series))), layout="constrained")
-    grid = fig.subplots(max(1, len(series)), 4, squeeze=False)
-    for row, s in zip(grid, series, strict=False):
-        ax_t, ax_r, ax_q, ax_h = row
+    n = PANELS_PER_SERIES * len(series)
+    what = f"fit_figure: 4 per residual series, {len(series)} series"
+    fig, axes, _ = panels(ax, n, what, ncols=4, panel_size=(3.5, 2.8))
+    for k, s in enumerate(series):
+        ax_t, ax_r, ax_q, ax_h = axes[PANELS_PER_SERIES * k : PANELS_PER_SERIES * (k + 1)]
         ax_t.plot(s.time, s.data, ".", color=DATA_COLOR, ms=4, label="data", gid="data")
         order = np.argsort(s.time)
         ax_t.plot(

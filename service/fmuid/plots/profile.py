@@ -14,16 +14,16 @@ from fmuid.plots._common import (
     PROFILE_COLOR,
     QUADRATIC_COLOR,
     THRESHOLD_COLOR,
+    AxesArg,
     axis_label,
-    figure_of,
-    new_figure,
+    panels,
     to_plot_coordinate,
 )
 from fmuid.profile.result import ParameterProfile, ProfileResult
 
 
 def profile_figure(
-    result: ProfileResult, name: str | None = None, *, ax: Axes | None = None, ncols: int = 3
+    result: ProfileResult, name: str | None = None, *, ax: AxesArg = None, ncols: int = 3
 ) -> Figure:
     """Draw the profile likelihood of every free parameter (one panel each), or of one.
 
@@ -41,8 +41,9 @@ def profile_figure(
     name
         Draw only this parameter's profile (default: every parameter).
     ax
-        Draw into these axes (needs ``name``, or a result with one parameter); default: a new
-        figure.
+        Draw into these axes instead of a new figure: one ``Axes`` for one parameter's profile
+        (``name`` given), or a sequence of them, one per parameter in ``result.parameters``
+        order.
     ncols
         Panels per row of a new figure.
 
@@ -56,20 +57,17 @@ def profile_figure(
     KeyError
         If ``name`` was not profiled.
     ValueError
-        If ``ax`` is given for several parameters.
+        If ``ax`` does not hold one axes per drawn profile.
 
     """
     names = [name] if name is not None else list(result.parameters)
     for n in names:
         if n not in result.parameters:
             raise KeyError(f"{n!r} was not profiled; profiled: {', '.join(result.parameters)}")
-    if ax is not None and len(names) != 1:
-        raise ValueError("ax= draws one profile: pass the parameter's name")
-    if ax is None:
-        fig, axes = new_figure(len(names), ncols=ncols)
+    what = f"profile_figure: one per profile, {', '.join(names)}"
+    fig, axes, new = panels(ax, len(names), what, ncols=ncols)
+    if new:
         fig.suptitle(f"Profile likelihoods ({result.confidence:.0%} confidence)")
-    else:
-        fig, axes = figure_of(ax), [ax]
     fisher = result.fit.fisher_sd_z()
     for panel, n in zip(axes, names, strict=True):
         prof = result.parameters[n]
@@ -154,7 +152,7 @@ def _draw_profile(
     ax.set_title(f"{prof.name}: {prof.status.replace('_', ' ')}", fontsize=9)
 
 
-def parameter_paths_figure(result: ProfileResult, name: str, *, ax: Axes | None = None) -> Figure:
+def parameter_paths_figure(result: ProfileResult, name: str, *, ax: AxesArg = None) -> Figure:
     """Draw how the other free parameters move along the profile of ``name`` (thesis Fig 2.9).
 
     Every parameter is shown as its change from the estimate in fitted coordinates (decades for
@@ -169,7 +167,7 @@ def parameter_paths_figure(result: ProfileResult, name: str, *, ax: Axes | None 
     name
         The profiled parameter.
     ax
-        Draw into these axes (default: a new figure).
+        Draw into this ``Axes`` (or a sequence holding one) instead of a new figure.
 
     Returns
     -------
@@ -181,6 +179,8 @@ def parameter_paths_figure(result: ProfileResult, name: str, *, ax: Axes | None 
     ------
     KeyError
         If ``name`` was not profiled.
+    ValueError
+        If ``ax`` holds more than one axes.
 
     """
     prof = result.parameters[name]
@@ -189,28 +189,24 @@ def parameter_paths_figure(result: ProfileResult, name: str, *, ax: Axes | None 
     scales = dict(zip(fit.names, fit.scales, strict=True))
     ok = [p for p in prof.points if p.error is None]
     x = np.array([to_plot_coordinate(p.value, prof.scale) for p in ok])
-    if ax is None:
-        fig = Figure(figsize=(8.0, 4.5), layout="constrained")
-        ax = fig.add_subplot()
-    else:
-        fig = figure_of(ax)
+    fig, (panel,), _ = panels(ax, 1, "parameter_paths_figure", ncols=1, panel_size=(8.0, 4.5))
     for other in others:
         ref = to_plot_coordinate(fit.estimates[other], scales[other])
         y = np.array(
             [to_plot_coordinate(p.params.get(other, math.nan), scales[other]) - ref for p in ok]
         )
-        (line,) = ax.plot(x, y, marker=".", lw=1.2, label=other, gid=f"path_{other}")
+        (line,) = panel.plot(x, y, marker=".", lw=1.2, label=other, gid=f"path_{other}")
         on_bound = [i for i, p in enumerate(ok) if other in p.at_bound]
         if on_bound:
-            ax.plot(x[on_bound], y[on_bound], "o", color=BOUND_COLOR, ms=4, ls="none")
+            panel.plot(x[on_bound], y[on_bound], "o", color=BOUND_COLOR, ms=4, ls="none")
     lo, hi = prof.ci_simultaneous
     x_lo = to_plot_coordinate(lo, prof.scale) if lo is not None else (x.min() if x.size else 0.0)
     x_hi = to_plot_coordinate(hi, prof.scale) if hi is not None else (x.max() if x.size else 0.0)
-    ax.axvspan(x_lo, x_hi, color="0.9", zorder=0, label="simultaneous CI")
-    ax.axvline(to_plot_coordinate(prof.estimate, prof.scale), color=ESTIMATE_COLOR, ls=":", lw=1)
-    ax.set_xlabel(axis_label(name, prof.scale, result.fit.units.get(name, "")))
-    ax.set_ylabel("change from estimate\n(decades if log-scaled, else own unit)")
-    ax.set_title(f"Parameters along the profile of {name}")
+    panel.axvspan(x_lo, x_hi, color="0.9", zorder=0, label="simultaneous CI")
+    panel.axvline(to_plot_coordinate(prof.estimate, prof.scale), color=ESTIMATE_COLOR, ls=":", lw=1)
+    panel.set_xlabel(axis_label(name, prof.scale, result.fit.units.get(name, "")))
+    panel.set_ylabel("change from estimate\n(decades if log-scaled, else own unit)")
+    panel.set_title(f"Parameters along the profile of {name}")
     if others:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
+        panel.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
     return fig

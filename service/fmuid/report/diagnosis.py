@@ -6,11 +6,11 @@ import logging
 from typing import Any
 
 from fmuid.diagnose.catalogue import study_catalogue
-from fmuid.diagnose.plots import figures as diagnose_figures
 from fmuid.diagnose.result import verdict
 from fmuid.diagnose.series import diagnosis_series
 from fmuid.errors import FmuidError
 from fmuid.fit.problem import Problem
+from fmuid.plots.diagnosis import diagnosis_figures
 from fmuid.report.page import HtmlPage, fmt, interval
 
 logger = logging.getLogger(__name__)
@@ -185,7 +185,7 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
     if problem is None:
         return
     try:
-        figures = diagnose_figures(diagnosis, diagnosis_series(diagnosis, problem))
+        figures = diagnosis_figures(diagnosis, diagnosis_series(diagnosis, problem))
     except FmuidError as error:
         logger.warning("diagnosis figures not drawn: %s", error)
         page.paragraph(f"Figures not drawn: {error}", note=True)

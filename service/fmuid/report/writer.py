@@ -50,7 +50,7 @@ def write_report(
     or can be built from ``fmu``, ``experiments`` and ``spec``, the fit overlay with residual
     diagnostics and (for a profile) the trajectory band are drawn too. A diagnosis (any object
     whose ``to_dict()`` follows the contract's "Diagnose result") shows its summary and the
-    figures of ``fmuid.diagnose.plots.figures`` when that function exists.
+    figures of ``fmuid.plots.diagnosis_figures``.
 
     Parameters
     ----------
