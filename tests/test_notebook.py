@@ -96,6 +96,7 @@ def test_readme_python_examples_run(study_dir):
     for block in blocks:
         exec(compile(block, str(README), "exec"), namespace)  # noqa: S102
     assert namespace["table"].loc["k", "unit"] == "N/m"
+    assert [a.get_xlabel() for a in namespace["axes"]] == ["log10(k [N/m])", "log10(b [N.s/m])"]
     assert namespace["again"].to_dict() == namespace["result"].to_dict()
 
 
@@ -116,3 +117,4 @@ def test_a_diagnosis_loads_back_equal(study_dir):
     pd.testing.assert_frame_equal(loaded.to_frame(), diagnosis.to_frame())
     frame = diagnosis.to_frame()
     assert set(frame.index) >= {"k", "b", *diagnosis.added_parameters}
+    assert frame.loc["k", "unit"] == "N/m" and frame.loc["b", "unit"] == "N.s/m"

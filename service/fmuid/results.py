@@ -324,7 +324,7 @@ def _diagnosis_rows(result: Diagnosis) -> dict[str, dict[str, Any]]:
             "role": "model",
             "before": _nan(result.parameters_before.get(name)),
             "after": _nan(result.parameters_after.get(name)),
-            "unit": "",
+            "unit": result.units.get(name, ""),
             "ci_low": float("nan"),
             "ci_high": float("nan"),
         }
