@@ -74,12 +74,16 @@ def test_petab_files_follow_the_mapping(study, msd_fmu, tmp_path):
         {"conditionId": "fmuid_fixed", "targetId": "m", "targetValue": "1.1"}
     ]
     obs = {r["observableId"]: r for r in _tsv(tmp_path / "p" / "observables.tsv")}
-    assert obs["x"]["noiseFormula"] == "0.03" and obs["x"]["observableFormula"] == "x"
-    assert obs["v"]["noiseFormula"] == obs["v"]["noisePlaceholders"] == "noiseParameter1_v"
+    # PEtab forbids observable ids that name a model entity: obs_<output>, formula the output
+    assert set(obs) == {"obs_x", "obs_v"}
+    assert obs["obs_x"]["noiseFormula"] == "0.03" and obs["obs_x"]["observableFormula"] == "x"
+    assert obs["obs_v"]["noiseFormula"] == obs["obs_v"]["noisePlaceholders"]
+    assert obs["obs_v"]["noisePlaceholders"] == "noiseParameter1_obs_v"
     meas = _tsv(tmp_path / "p" / "measurements.tsv")
     # 121 rows, outputs in every 3rd (41) and every 4th (31) row, two outputs each
     assert len(meas) == 2 * (41 + 31)
     assert {r["experimentId"] for r in meas} == {"sine", "e_2nd_run"}
+    assert {r["observableId"] for r in meas} == {"obs_x", "obs_v"}
     inputs = _tsv(tmp_path / "p" / "inputs.tsv")
     assert len(inputs) == 2 * 121 and {r["inputId"] for r in inputs} == {"f"}
 
@@ -132,7 +136,7 @@ def test_what_fmuid_cannot_run_is_named(study, msd_fmu, tmp_path):
     problem.write_text(yaml.safe_dump(config))
     obs = tmp_path / "p" / "observables.tsv"
     obs.write_text(obs.read_text().replace("\tx\t0.03", "\t2*x\t0.03"))
-    with pytest.raises(SpecError, match="observable x: observableFormula '2\\*x'"):
+    with pytest.raises(SpecError, match="observable obs_x: observableFormula '2\\*x'"):
         read_petab(problem)
 
 
@@ -143,7 +147,7 @@ def test_an_estimated_sigma_becomes_a_noise_parameter_and_back(study, msd_fmu, t
     estimated = spec_from_json(json.dumps(data))
     problem = write_petab(tmp_path / "p", msd_fmu, experiments, estimated)
     obs = {r["observableId"]: r for r in _tsv(tmp_path / "p" / "observables.tsv")}
-    assert obs["x"]["noiseFormula"] == "sigma_x"
+    assert obs["obs_x"]["noiseFormula"] == "sigma_x"
     params = {r["parameterId"]: r for r in _tsv(tmp_path / "p" / "parameters.tsv")}
     assert params["sigma_x"]["estimate"] == "true"
     back = read_petab(problem)
@@ -171,3 +175,46 @@ def test_tractor_steer_angle_sampled_faster_than_the_yaw_rates(tractor_fmu, tmp_
     imported = make_problem(back.fmu, back.experiments, back.spec)
     start = {n: p.start for n, p in spec.parameters.items()}
     assert imported.chi2(imported.to_z(start)) == original.chi2(original.to_z(start))
+
+
+def _libpetab_issues(problem_yaml):
+    from formats.petab_model import petab_problem
+
+    problem = petab_problem(problem_yaml)
+    return problem, [(str(i.level.name), i.message) for i in problem.validate()]
+
+
+EXTENSION_WARNING = (
+    "WARNING",
+    "Validation of PEtab extensions is not yet implemented, but the given problem uses the "
+    "following extensions: fmuid",
+)
+
+
+def test_libpetab_finds_no_error_in_exported_problems(study, msd_fmu, tmp_path):
+    pytest.importorskip("petab.v2", reason="libpetab (petab, in the dev extra) is not installed")
+    experiments, spec = study
+    data = json.loads(spec.model_dump_json(exclude_none=True))
+    data["outputs"]["x"] = {"sigma": "estimate"}
+    for name, s in (("given", spec), ("estimated", spec_from_json(json.dumps(data)))):
+        problem, issues = _libpetab_issues(write_petab(tmp_path / name, msd_fmu, experiments, s))
+        assert issues == [EXTENSION_WARNING], name
+        # libpetab reads the problem fmuid meant: free parameters, bounds, start values, data
+        free = ["k", "b"] + (["sigma_x"] if name == "estimated" else [])
+        assert problem.x_free_ids == free
+        assert problem.lb[:2] == [0.5, -1.0] and problem.ub[:2] == [20.0, 10.0]
+        assert problem.x_nominal[:2] == [3.0, 1.0]
+        assert problem.n_measurements == 2 * (41 + 31)
+
+
+def test_libpetab_rejects_an_observable_named_as_the_fmu_output(study, msd_fmu, tmp_path):
+    """The adapter lets libpetab check against the FMU: the ids fmuid wrote before are caught."""
+    pytest.importorskip("petab.v2", reason="libpetab (petab, in the dev extra) is not installed")
+    experiments, spec = study
+    problem = write_petab(tmp_path / "p", msd_fmu, experiments, spec)
+    for table in ("observables.tsv", "measurements.tsv"):
+        path = tmp_path / "p" / table
+        path.write_text(path.read_text().replace("obs_x", "x"))
+    _, issues = _libpetab_issues(problem)
+    assert ("ERROR", "Observable IDs ['x'] shadow model entities.") in issues
+    assert read_petab(problem).spec.outputs == spec.outputs  # fmuid still reads such files

@@ -98,9 +98,9 @@ def write_petab(
     ids = _experiment_ids([e.name for e in experiments])
     model_file = Path(fmu).name
     shutil.copyfile(fmu, out / model_file)
-    noise: list[dict[str, Any]] = []
-    for output, o in spec.outputs.items():
-        noise.append(_observable(output, o.sigma))
+    model = FmuModel(Path(fmu))
+    obs_ids = observable_ids(spec.outputs, {*model.parameters, *model.inputs, *model.outputs})
+    noise = [_observable(output, obs_ids[output], o.sigma) for output, o in spec.outputs.items()]
     params = [
         {
             "parameterId": name,
@@ -150,12 +150,12 @@ def write_petab(
     )
     _write_tsv(
         out / FILES["measurement"],
-        _measurements(ids, experiments, spec),
+        _measurements(ids, obs_ids, experiments, spec),
         ("observableId", "experimentId", "time", "measurement", "noiseParameters"),
     )
     _write_tsv(
         out / FILES["input"],
-        _input_rows(ids, experiments, spec, FmuModel(Path(fmu)).inputs),
+        _input_rows(ids, experiments, spec, model.inputs),
         ("experimentId", "time", "inputId", "value"),
     )
     problem = {
@@ -193,27 +193,44 @@ _OBSERVABLE_COLUMNS = (
 )  # fmt: skip
 
 
-def _observable(output: str, sigma: float | str) -> dict[str, Any]:
-    formula = {"column": PLACEHOLDER.format(output), "estimate": f"sigma_{output}"}
+def observable_ids(outputs: Iterable[str], model_names: Iterable[str]) -> dict[str, str]:
+    """Return the PEtab observable id of each output: ``obs_<output>``.
+
+    PEtab forbids an observable id that names a model entity, so the id is never the output's
+    own name; a clash with another FMU variable gets a number appended.
+    """
+    taken = set(model_names)
+    ids = {}
+    for output in outputs:
+        ids[output] = _unique(f"obs_{output}", taken)
+        taken.add(ids[output])
+    return ids
+
+
+def _observable(output: str, oid: str, sigma: float | str) -> dict[str, Any]:
+    formula = {"column": PLACEHOLDER.format(oid), "estimate": f"sigma_{output}"}
     return {
-        "observableId": output,
+        "observableId": oid,
         "observableFormula": output,
         "noiseFormula": formula[sigma] if isinstance(sigma, str) else _num(sigma),
-        "noisePlaceholders": PLACEHOLDER.format(output) if sigma == "column" else "",
+        "noisePlaceholders": PLACEHOLDER.format(oid) if sigma == "column" else "",
         "noiseDistribution": "normal",
     }
+
+
+def _unique(base: str, taken: set[str]) -> str:
+    candidate, k = base, 1
+    while candidate in taken:
+        k += 1
+        candidate = f"{base}_{k}"
+    return candidate
 
 
 def _experiment_ids(names: Iterable[str]) -> list[str]:
     ids: list[str] = []
     for name in names:
         base = re.sub(r"\W", "_", Path(name).stem) or "experiment"
-        base = base if re.match(r"[A-Za-z_]", base) else f"e_{base}"
-        candidate, k = base, 1
-        while candidate in ids:
-            k += 1
-            candidate = f"{base}_{k}"
-        ids.append(candidate)
+        ids.append(_unique(base if re.match(r"[A-Za-z_]", base) else f"e_{base}", set(ids)))
     return ids
 
 
@@ -229,7 +246,10 @@ def _data_scale(experiments: Sequence[Experiment], output: str) -> float:
 
 
 def _measurements(
-    ids: Sequence[str], experiments: Sequence[Experiment], spec: Spec
+    ids: Sequence[str],
+    obs_ids: Mapping[str, str],
+    experiments: Sequence[Experiment],
+    spec: Spec,
 ) -> list[dict[str, Any]]:
     rows = []
     for eid, exp in zip(ids, experiments, strict=True):
@@ -239,7 +259,7 @@ def _measurements(
             for i in np.flatnonzero(mask):
                 rows.append(
                     {
-                        "observableId": output,
+                        "observableId": obs_ids[output],
                         "experimentId": eid,
                         "time": _num(exp.time[i]),
                         "measurement": _num(exp.columns[output][i]),

@@ -50,7 +50,7 @@ def read_petab(problem_file: str | os.PathLike[str]) -> PetabProblem:
     tables = {k: _read_tables(base, problem, f"{k}_files") for k in FILES if k != "input"}
     tables["input"] = [r for f in ext.get("input_files") or [] for r in _read_tsv(base / f)]
     observables = {r["observableId"]: r for r in tables["observable"]}
-    outputs, noise_params = _outputs(path, observables)
+    outputs, output_of, noise_params = _outputs(path, observables)
     parameters, fixed = _parameters(tables["parameter"], noise_params)
     fixed.update(_conditions(tables["condition"], tables["experiment"]))
     fixed.update(ext.get("fixed_text") or {})
@@ -62,7 +62,7 @@ def read_petab(problem_file: str | os.PathLike[str]) -> PetabProblem:
         **{k: ext[k] for k in ("confidence", "global_search", "seed", "interface") if k in ext},
     }
     spec = spec_from_json(json.dumps(spec_data), str(path))
-    experiments = _experiments(tables, outputs)
+    experiments = _experiments(tables, outputs, output_of)
     return PetabProblem(base / model["location"], experiments, spec)
 
 
@@ -86,16 +86,20 @@ def _read_tsv(path: Path) -> list[dict[str, str]]:
 
 def _outputs(
     path: Path, observables: Mapping[str, Mapping[str, str]]
-) -> tuple[dict[str, dict[str, Any]], set[str]]:
+) -> tuple[dict[str, dict[str, Any]], dict[str, str], set[str]]:
+    """Return the outputs with their noise, each observable's output, the noise parameters."""
     outputs: dict[str, dict[str, Any]] = {}
+    output_of: dict[str, str] = {}
     noise_params = set()
     for oid, row in observables.items():
         where = f"{path.parent / FILES['observable']}: observable {oid}"
-        if row.get("observableFormula") != oid:
+        output = row.get("observableFormula", "")
+        if not re.fullmatch(r"[A-Za-z_]\w*", output) or output in outputs:
             raise SpecError(
-                f"{where}: observableFormula {row.get('observableFormula')!r} must be the FMU "
-                "output of the same name (fmuid fits FMU outputs directly)"
+                f"{where}: observableFormula {output!r} must be the name of an FMU output, "
+                "one observable per output (fmuid fits FMU outputs directly)"
             )
+        output_of[oid] = output
         if (row.get("noiseDistribution") or "normal") != "normal":
             raise SpecError(
                 f"{where}: noiseDistribution {row['noiseDistribution']!r} is not normal"
@@ -110,8 +114,8 @@ def _outputs(
             noise_params.add(formula)
         else:
             sigma = finite_number(formula, f"{where}: noiseFormula")
-        outputs[oid] = {"sigma": sigma}
-    return outputs, noise_params
+        outputs[output] = {"sigma": sigma}
+    return outputs, output_of, noise_params
 
 
 def _parameters(
@@ -157,7 +161,9 @@ def _conditions(
 
 
 def _experiments(
-    tables: Mapping[str, Sequence[Mapping[str, str]]], outputs: Mapping[str, Mapping[str, Any]]
+    tables: Mapping[str, Sequence[Mapping[str, str]]],
+    outputs: Mapping[str, Mapping[str, Any]],
+    output_of: Mapping[str, str],
 ) -> list[Experiment]:
     out = []
     for row in tables["experiment"]:
@@ -166,11 +172,17 @@ def _experiments(
         for r in tables["measurement"]:
             if r["experimentId"] == eid:
                 t = finite_number(r["time"], f"{FILES['measurement']}: {eid} time")
-                samples.setdefault(r["observableId"], {})[t] = finite_number(
+                output = output_of.get(r["observableId"])
+                if output is None:
+                    raise SpecError(
+                        f"{FILES['measurement']}: {eid}: observable {r['observableId']!r} "
+                        f"is not in {FILES['observable']}"
+                    )
+                samples.setdefault(output, {})[t] = finite_number(
                     r["measurement"], f"{FILES['measurement']}: {eid}"
                 )
-                if outputs.get(r["observableId"], {}).get("sigma") == "column":
-                    samples.setdefault(f"sigma_{r['observableId']}", {})[t] = finite_number(
+                if outputs[output]["sigma"] == "column":
+                    samples.setdefault(f"sigma_{output}", {})[t] = finite_number(
                         r["noiseParameters"], f"{FILES['measurement']}: {eid} noiseParameters"
                     )
         for r in tables["input"]:
