@@ -1,4 +1,6 @@
-"""Generic candidates as wrappers around any FMU: they act on its inputs or its outputs.
+"""Generic effects as wrappers around any FMU predictor: they act on its inputs or its outputs.
+
+The diagnose catalogue's generic candidates and the design's hypotheses are built on them.
 
 Input effects apply in the order offset, lag, delay; output effects in the order lag, bias.
 """
