@@ -276,7 +276,7 @@ def default_space(problem: Problem) -> Space:
     steps = np.concatenate(
         [np.diff(e.time[m]) for e, ms in zip(problem.experiments, problem.masks) for m in ms]
     )
-    rate = 1.0 / float(np.median(steps))
+    rate = float(f"{1.0 / float(np.median(steps)):.6g}")
     f_top = max(rate / 8.0, 0.1)
     sigma = problem.representative_sigma()
     doc = {

@@ -125,10 +125,13 @@ def input_signal(trial: Trial) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _grid(duration: float, f_max: float) -> np.ndarray:
-    """Input sample times: at least 20 per period of ``f_max`` and every 0.05 s."""
+    """Input sample times: at least 20 per period of ``f_max`` and every 0.05 s.
+
+    Rounded as :func:`output_times` rounds, so that a shared instant is one row.
+    """
     step = min(0.05, 1.0 / (20.0 * f_max))
     n = int(math.ceil(duration / step))
-    return np.linspace(0.0, duration, n + 1)
+    return np.round(np.linspace(0.0, duration, n + 1), 10)
 
 
 def output_times(trial: Trial) -> np.ndarray:

@@ -26,6 +26,11 @@ FILTER_STEP = 0.005
 spline through the FMU's own step times (no extra FMU steps)."""
 
 
+FINEST = 20
+"""A fine grid is at most this many times finer than its nominal step, however close two data
+rows lie (rows nearer than that are still on the grid; nothing in between them is)."""
+
+
 def first_order_lag(time: np.ndarray, values: np.ndarray, tau: float) -> np.ndarray:
     """Exact first-order lag ``y' = (u - y) / tau`` of a piecewise-linear ``u``, from rest at u[0].
 
@@ -86,7 +91,7 @@ class AugmentedPredictor:
         cached = self._grids.get(key)
         if cached is None or cached[0] is not experiment:
             t = experiment.time
-            step = min(step, float(np.min(np.diff(t))) / 2)
+            step = max(min(step, float(np.min(np.diff(t))) / 2), step / FINEST)
             fine = np.arange(t[0], t[-1], step)
             index = np.searchsorted(t, fine)
             near = np.minimum(
