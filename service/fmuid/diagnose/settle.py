@@ -31,6 +31,10 @@ p-value below this level."""
 MAX_TIES = 2
 """Ties searched (the strongest first); each search is a screen plus a few full fits."""
 
+CANDIDATES = 4
+"""Tests sampled per input family (step, chirp, multisine) for each tie: the screen's cost
+(about 2 (n + 2) simulations per test) stays a fraction of the diagnosis."""
+
 
 def hypothesis(fit: CandidateFit) -> Hypothesis:
     """Return a fitted candidate as a hypothesis: its parameters, fitted values and wrappers."""
@@ -65,7 +69,7 @@ def settling_tests(
         One per tie searched, in the order of ``ties``.
 
     """
-    space = default_space(problem)
+    space = default_space(problem).model_copy(update={"candidates": CANDIDATES})
     a = hypothesis(named)
     return [
         discriminating_experiment(problem.fmu_path, problem.spec, space, a, hypothesis(t.fit))
