@@ -243,6 +243,7 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         fmu=dict(data.get("fmu", {})),
         cost=_cost(data.get("cost")),
         units=dict(data.get("units", {})),
+        discriminating_experiment=data.get("discriminating_experiment"),
     )
 
 

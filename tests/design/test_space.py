@@ -51,6 +51,11 @@ def test_signals_follow_their_definitions():
     assert u == pytest.approx(0.17453 * np.sin(2 * np.pi * (0.1 * t + 0.02 * t**2)), abs=1e-12)
     multi = Trial("multisine", {"f_min": 0.1, "f_max": 1, "amplitude": 2, "tones": 4}, 8, 5, ("x",))
     assert np.max(np.abs(input_signal(multi)[1])) == pytest.approx(2.0)
+    # every family starts from rest: a test begins in straight driving (or at equilibrium)
+    dlc = Trial("double_lane_change", {"duration": 2.0, "amplitude": 0.1}, 10.0, 5.0, ("x",))
+    step = Trial("step", {"amplitude": 1.0, "time": 2.0}, 10.0, 5.0, ("x",))
+    for trial in (ramp, chirp, multi, dlc, step):
+        assert input_signal(trial)[1][0] == 0.0, trial.family
     assert output_times(ramp)[[0, 1, -1]] == pytest.approx([0.0, 0.2, 10.0])
 
 

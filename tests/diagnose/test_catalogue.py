@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import fieldtruth as ft
-from fmuid.diagnose.wrappers import AugmentedPredictor
 from fmuid.fit.predictor import FmuPredictor
+from fmuid.fit.wrappers import AugmentedPredictor
 
 WRAPPERS = {
     "sensor_lag": ("tau_sensor", ("sensor_lag", None)),
@@ -33,3 +33,25 @@ def test_wrapper_matches_field_truth(tractor_fmu: Path, effect: str) -> None:
     sigma = float(np.nanmax(exp.columns["sigma_gam_t"]))
     assert np.max(np.abs(y[:, 0] - truth["gam_t"])) < 0.05 * sigma
     assert np.max(np.abs(y[:, 1] - truth["gam_i"])) < 0.05 * sigma
+
+
+@pytest.mark.parametrize("effect", ["sensor_lag", "steering_lag"])
+def test_rows_a_rounding_error_apart_neither_blow_up_the_grid_nor_move_the_lag(
+    tractor_fmu: Path, effect: str
+) -> None:
+    from fmuid.data import experiment_from_arrays
+
+    time = np.arange(0.0, 6.0001, 0.1)
+    steer = 0.05 * np.sin(time)
+    near = np.insert(time, 11, time[10] + 2e-15)
+    columns = {"delta": np.interp(near, time, steer), "gam_t": np.zeros(len(near))}
+    twin = experiment_from_arrays("near.csv", near, columns)
+    plain = experiment_from_arrays("plain.csv", time, {"delta": steer, "gam_t": np.zeros(61)})
+    name, wrapper = WRAPPERS[effect]
+    predictor = AugmentedPredictor(FmuPredictor(tractor_fmu, {}, ["delta"]), {name: wrapper})
+    values = {**ft.NOMINAL, name: 0.2}
+    y_near = predictor.predict(values, twin, ["gam_t"])[:, 0]
+    y_plain = predictor.predict(values, plain, ["gam_t"])[:, 0]
+    # the same lag within the grids' discretisation error (the near row makes its grid finer)
+    scale = float(np.max(np.abs(y_plain)))
+    assert np.max(np.abs(np.delete(y_near, 11) - y_plain)) < 1e-4 * scale

@@ -54,3 +54,50 @@ def test_no_python_literal_reaches_the_page_and_units_show(tmp_path):
 def test_fmt_writes_mappings_and_lists_as_text():
     assert fmt({"a": 1.0, "b": [1, None]}) == "a = 1; b = 1, \u2014"
     assert fmt({"a": {"b": 2.5}}) == "a = b = 2.5"
+
+
+def _proposal():
+    """A settling test as the diagnosis stores it (a step on input f, two outputs)."""
+    import numpy as np
+
+    from fmuid.design.discriminate import Discrimination
+    from fmuid.design.signals import Trial
+
+    time = np.linspace(0.0, 6.0, 61)
+    trial = Trial("step", {"amplitude": 1.0, "time": 1.0}, 6.0, 10.0, ("x", "v"))
+    lag = {"x": np.tanh(time), "v": np.cosh(time) ** -2}
+    delay = {"x": np.tanh(time - 0.1), "v": np.cosh(time - 0.1) ** -2}
+    found = Discrimination(
+        trial, ("sensor_lag", "input_delay"),
+        {"input_delay fitted to sensor_lag": 41.5, "sensor_lag fitted to input_delay": 38.25},
+        time, {"sensor_lag": lag, "input_delay": delay}, "f", 24,
+    )  # fmt: skip
+    return found
+
+
+def test_a_settling_test_round_trips_through_json():
+    import json
+
+    from fmuid.design.discriminate import discrimination_from_dict
+
+    doc = json.loads(json.dumps(_proposal().to_dict()))
+    again = discrimination_from_dict(doc)
+    assert again.to_dict() == doc
+    assert again.expected_chi2 == 38.25
+    assert again.trial.outputs == ("x", "v") and again.input_name == "f"
+
+
+def test_the_settling_test_gets_its_table_and_figure(tmp_path):
+    doc = _Unexplained().to_dict()
+    doc.update(effect="sensor_lag", discriminating_experiment=_proposal().to_dict())
+
+    class _Named:
+        def to_dict(self):
+            return doc
+
+    text = html.unescape(write_report(_Named(), tmp_path).read_text())
+    body = re.sub(r"<[^>]+>", " ", text.split("<body>")[1])
+    assert "A test that would settle the tie" in body
+    assert re.search(r"step of f \(amplitude 1, time 1\)", body)
+    assert re.search(r"chi2 of sensor_lag fitted to input_delay\s+38\.25", body)
+    assert (tmp_path / "diagnose_settling_test.png").stat().st_size > 1000

@@ -21,12 +21,18 @@ from scipy.stats import chi2 as chi2_dist
 
 from fmuid.data import ParameterSpec, Spec
 from fmuid.design.fisher import trial_spec
-from fmuid.design.signals import Trial, output_times, sample_trials, trial_experiment
+from fmuid.design.signals import (
+    Trial,
+    output_times,
+    sample_trials,
+    trial_experiment,
+    trial_from_dict,
+)
 from fmuid.design.space import Space, space_from_json
-from fmuid.diagnose.wrappers import AugmentedPredictor
 from fmuid.fit.optimize import fit_problem, jacobian
 from fmuid.fit.predictor import FmuPredictor
 from fmuid.fit.problem import Problem
+from fmuid.fit.wrappers import AugmentedPredictor
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel
 from fmuid.progress import Progress, ProgressCallback
@@ -48,7 +54,7 @@ class Hypothesis:
     values
         Parameter values under which it predicts (e.g. its fit to the data).
     wrappers
-        Generic effects around the FMU, as :class:`fmuid.diagnose.wrappers.AugmentedPredictor`
+        Generic effects around the FMU, as :class:`fmuid.fit.wrappers.AugmentedPredictor`
         takes them: ``{parameter: (kind, input or output)}``, e.g.
         ``{"tau_sensor": ("sensor_lag", None)}``.
     fixed
@@ -127,7 +133,10 @@ class Discrimination:
         return min(self.separation.values())
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (``discriminating_experiment`` of the diagnose result)."""
+        """JSON form (``discriminating_experiment`` of the diagnose result).
+
+        ``time`` and ``predictions`` (6 significant digits) carry what the plot draws.
+        """
         lam = self.expected_chi2
         return {
             "experiment": self.trial.to_dict(self.input_name),
@@ -136,7 +145,33 @@ class Discrimination:
             "expected_chi2": round(lam, 4),
             "expected_p_value": float(chi2_dist.sf(lam, 1)),
             "screened": self.screened,
+            "time": _digits(self.time),
+            "predictions": {
+                h: {o: _digits(y) for o, y in ys.items()} for h, ys in self.predictions.items()
+            },
         }
+
+
+def _digits(values: np.ndarray) -> list[float]:
+    return [float(f"{v:.6g}") for v in np.asarray(values, dtype=float)]
+
+
+def discrimination_from_dict(doc: Mapping[str, Any]) -> Discrimination:
+    """Rebuild a :class:`Discrimination` from its :meth:`Discrimination.to_dict` form."""
+    experiment = doc["experiment"]
+    a, b = doc["hypotheses"]
+    return Discrimination(
+        trial=trial_from_dict(experiment),
+        hypotheses=(str(a), str(b)),
+        separation={str(k): float(v) for k, v in doc["expected_separation"].items()},
+        time=np.asarray(doc["time"], dtype=float),
+        predictions={
+            str(h): {str(o): np.asarray(y, dtype=float) for o, y in ys.items()}
+            for h, ys in doc["predictions"].items()
+        },
+        input_name=str(experiment["input_variable"]),
+        screened=int(doc["screened"]),
+    )
 
 
 def _clean(problem: Problem, values: Mapping[str, float]) -> dict[str, np.ndarray]:
@@ -241,7 +276,7 @@ def default_space(problem: Problem) -> Space:
     steps = np.concatenate(
         [np.diff(e.time[m]) for e, ms in zip(problem.experiments, problem.masks) for m in ms]
     )
-    rate = 1.0 / float(np.median(steps))
+    rate = float(f"{1.0 / float(np.median(steps)):.6g}")
     f_top = max(rate / 8.0, 0.1)
     sigma = problem.representative_sigma()
     doc = {

@@ -6,7 +6,8 @@ Families (all start from rest at 0; the input is linear between its samples):
 - ``ramp``: the thesis's manoeuvre: 0 until ``start``, linear to ``amplitude`` over ``rise``.
 - ``chirp``: ``amplitude sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))``, linear sweep over the test.
 - ``multisine``: ``tones`` sines spread logarithmically over ``[f_min, f_max]``, Schroeder
-  phases, scaled to peak ``amplitude``.
+  phases, faded in by a raised cosine over one period of ``f_min`` (at most a quarter of the
+  test), scaled to peak ``amplitude``.
 - ``double_lane_change``: from 1 s, one sine period of length ``duration`` (lane change),
   straight for ``duration``, then the mirrored period back.
 """
@@ -113,6 +114,8 @@ def input_signal(trial: Trial) -> tuple[np.ndarray, np.ndarray]:
         t = _grid(T, float(freqs[-1]))
         phases = -np.pi * np.arange(n) * (np.arange(n) + 1) / n
         u = np.sin(2.0 * np.pi * freqs[:, None] * t[None, :] + phases[:, None]).sum(axis=0)
+        fade = min(1.0 / float(freqs[0]), T / 4.0)
+        u *= np.where(t < fade, 0.5 * (1.0 - np.cos(np.pi * t / fade)), 1.0)
         return t, a * u / max(float(np.max(np.abs(u))), 1e-12)
     if trial.family == "double_lane_change":
         d = float(s["duration"])
@@ -125,10 +128,13 @@ def input_signal(trial: Trial) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _grid(duration: float, f_max: float) -> np.ndarray:
-    """Input sample times: at least 20 per period of ``f_max`` and every 0.05 s."""
+    """Input sample times: at least 20 per period of ``f_max`` and every 0.05 s.
+
+    Rounded as :func:`output_times` rounds, so that a shared instant is one row.
+    """
     step = min(0.05, 1.0 / (20.0 * f_max))
     n = int(math.ceil(duration / step))
-    return np.linspace(0.0, duration, n + 1)
+    return np.round(np.linspace(0.0, duration, n + 1), 10)
 
 
 def output_times(trial: Trial) -> np.ndarray:

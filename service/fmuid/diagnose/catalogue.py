@@ -1,8 +1,9 @@
 """Catalogue of left-out physics: candidates that each add one or more parameters to a model.
 
-Generic candidates wrap any FMU (:mod:`.wrappers`: they act on its inputs or outputs); physics
-candidates switch on FMU parameters that are off by default, as the FMU declares them or the
-spec lists them (:mod:`.knowledge`). Names and units follow the contract's table.
+Generic candidates wrap any FMU (:mod:`fmuid.fit.wrappers`: they act on its inputs or
+outputs); physics candidates switch on FMU parameters that are off by default, as the FMU
+declares them or the spec lists them (:mod:`.knowledge`). Names and units follow the
+contract's table.
 
 =================  ====================  =================================================
 effect             parameter             acts as

@@ -15,7 +15,8 @@
    first (and the first dropped if the second alone does as well); otherwise the mismatch is
    ``unexplained`` and a generic correction (:mod:`.correction`) describes it.
 5. **Profile**: the added parameters' intervals, and the original parameters' intervals and
-   labels before and after the augmentation (:mod:`.absorb`).
+   labels before and after the augmentation (:mod:`.absorb`); on a tie, the test like the
+   data's that would settle it (:mod:`.settle`).
 6. **Explain** (:mod:`.explain`).
 """
 
@@ -38,6 +39,7 @@ from fmuid.diagnose.generic import generic_test
 from fmuid.diagnose.knowledge import AddedParameter
 from fmuid.diagnose.result import AddedEstimate, CandidateScore, Diagnosis
 from fmuid.diagnose.scan import CandidateFit, Scanner, augmented, scan, sensitivity_basis
+from fmuid.diagnose.settle import settles, settling_tests
 from fmuid.fit.optimize import (
     FitOptions,
     fit_problem,
@@ -75,6 +77,8 @@ class DiagnoseOptions:
         Cap on residual evaluations of each single-experiment fit of the agreement test.
     absorbed
         Re-profile the original parameters before and after the augmentation.
+    discriminate
+        On a tie, search the tests like the data's for one that would settle it.
     workers
         Processes for the profile branches (1: in this process).
     walk
@@ -90,6 +94,7 @@ class DiagnoseOptions:
     fit: FitOptions = FitOptions(ftol=1e-9, xtol=1e-9, gtol=1e-9, max_nfev=60)
     agreement_nfev: int = 20
     absorbed: bool = True
+    discriminate: bool = True
     workers: int = 1
     walk: WalkOptions = WalkOptions(  # noqa: B008 (frozen value)
         rise_per_step=0.15,
@@ -373,16 +378,23 @@ def diagnose_problem(
     rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
     ties = decide.ties(best, rivals) if len(applied) == 1 else []
     tied = [{**t.to_dict(), "intervals": _tie_intervals(run, t.fit)} for t in ties]
+    tests = settling_tests(problem, best, ties) if opts.discriminate else []
+    for entry, test in zip(tied, tests):
+        entry["expected_separation"] = round(test.expected_chi2, 4)
+    proposal = max(filter(settles, tests), key=lambda d: d.expected_chi2, default=None)
+    if tests:
+        run.report("tests that would settle the ties")
     lrt = float(stats.chi2.sf(max(fit.chi2 - final_fit.chi2, 0.0), len(added)))
     concealed = not rt.holm(tests_before, opts.alpha)
     return Diagnosis(
         mismatch=True, tests_after=tuple(tests_after), effect=best.candidate.effect,
         description=explain.explained(
             applied, estimates, fit.chi2, final_fit.chi2, lrt, ties, concealed
-        ),
+        ) + explain.settle(tests),
         candidates=tuple(scores), added_parameters=estimates, chi2_after=final_fit.chi2,
         lrt_p_value=lrt, bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
         parameters_after=dict(final_fit.estimates), second_effect=second,
         indistinguishable=tuple(tied), absorbed=absorbed_by,
+        discriminating_experiment=proposal.to_dict() if proposal else None,
         cost=run.cost(), **common,
     )  # fmt: skip

@@ -5,10 +5,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from scipy import stats
+
+from fmuid.design.discriminate import Discrimination
 from fmuid.diagnose.catalogue import Candidate
 from fmuid.diagnose.decide import Tie, strength
 from fmuid.diagnose.residual_tests import TestResult
 from fmuid.diagnose.result import AddedEstimate
+from fmuid.diagnose.settle import settles
 
 
 def _fmt_ci(e: AddedEstimate) -> str:
@@ -60,6 +64,27 @@ def explained(
             for t in ties
         )
         out += f" Equally good explanations that this data cannot tell apart: {names}."
+    return out
+
+
+def settle(tests: Sequence[Discrimination]) -> str:
+    """Sentences on the tests that would settle the ties, or on why none in reach can."""
+    out = ""
+    for found in tests:
+        a, b = found.hypotheses
+        lam = found.expected_chi2
+        if settles(found):
+            out += (
+                f" A test would tell {a} from {b}: {found.trial.label}, measuring "
+                f"{', '.join(found.trial.outputs)}, separates them by an expected chi2 of "
+                f"{lam:.3g} ({strength(float(stats.chi2.sf(lam, 1)))} expected)."
+            )
+        else:
+            out += (
+                f" No step, chirp or multisine like this data's (its input amplitude, length, "
+                f"rate and outputs) tells {a} from {b}: the largest expected chi2 separation "
+                f"is {lam:.3g}."
+            )
     return out
 
 

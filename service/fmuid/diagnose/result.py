@@ -135,6 +135,7 @@ class Diagnosis:
     fmu: dict[str, str] = field(default_factory=dict)
     cost: Cost = Cost(0, 0.0)
     units: dict[str, str] = field(default_factory=dict)
+    discriminating_experiment: dict[str, Any] | None = None
 
     def whiteness(self, after: bool) -> dict[str, float]:
         """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""
@@ -182,6 +183,7 @@ class Diagnosis:
             "generic_correction": self.generic_correction,
             "cost": self.cost.to_dict(),
             "units": dict(self.units),
+            "discriminating_experiment": self.discriminating_experiment,
         }
         return {"verdict": verdict(out), **out}
 

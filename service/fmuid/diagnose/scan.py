@@ -32,11 +32,11 @@ from scipy import stats
 
 from fmuid.diagnose.catalogue import Candidate
 from fmuid.diagnose.knowledge import AddedParameter
-from fmuid.diagnose.wrappers import AugmentedPredictor
 from fmuid.errors import FmuidError
 from fmuid.fit.optimize import FitOptions, refine, safe_residuals
 from fmuid.fit.predictor import FmuPredictor
 from fmuid.fit.problem import Problem
+from fmuid.fit.wrappers import AugmentedPredictor
 
 log = logging.getLogger(__name__)
 

@@ -1,4 +1,6 @@
-"""Generic candidates as wrappers around any FMU: they act on its inputs or its outputs.
+"""Generic effects as wrappers around any FMU predictor: they act on its inputs or its outputs.
+
+The diagnose catalogue's generic candidates and the design's hypotheses are built on them.
 
 Input effects apply in the order offset, lag, delay; output effects in the order lag, bias.
 """
@@ -22,6 +24,11 @@ INPUT_STEP = 0.02
 FILTER_STEP = 0.005
 """Grid step [s] on which a sensor lag filters the outputs, interpolated there by a cubic
 spline through the FMU's own step times (no extra FMU steps)."""
+
+
+FINEST = 20
+"""A fine grid is at most this many times finer than its nominal step, however close two data
+rows lie (rows nearer than that are still on the grid; nothing in between them is)."""
 
 
 def first_order_lag(time: np.ndarray, values: np.ndarray, tau: float) -> np.ndarray:
@@ -84,7 +91,7 @@ class AugmentedPredictor:
         cached = self._grids.get(key)
         if cached is None or cached[0] is not experiment:
             t = experiment.time
-            step = min(step, float(np.min(np.diff(t))) / 2)
+            step = max(min(step, float(np.min(np.diff(t))) / 2), step / FINEST)
             fine = np.arange(t[0], t[-1], step)
             index = np.searchsorted(t, fine)
             near = np.minimum(
