@@ -201,7 +201,7 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
     checkpoint = checkpoint_dir(store.blob_dir.parent, job.id)
     with (
         tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp,
-        _removed_at_exit(checkpoint),
+        _removed_after(checkpoint),
     ):
         try:
             fmu, data = stage_inputs(store, job, Path(tmp))
@@ -252,12 +252,13 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
 
 
 @contextlib.contextmanager
-def _removed_at_exit(folder: Path) -> Iterator[None]:
-    """Remove ``folder`` when the block is left (not when the process is killed in it)."""
-    try:
-        yield
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
+def _removed_after(folder: Path) -> Iterator[None]:
+    """Remove ``folder`` when the block ends normally (the job has its outcome).
+
+    Not when the process is killed or an exception escapes: the next run resumes from it.
+    """
+    yield
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def _log_fmi_version(fmu: Path) -> None:
