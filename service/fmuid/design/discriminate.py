@@ -116,6 +116,8 @@ class Discrimination:
         The FMU input driven.
     screened
         Tests scored.
+    sigma
+        Noise standard deviation of each sensor of the test (the space's), in the output's unit.
 
     """
 
@@ -126,6 +128,7 @@ class Discrimination:
     predictions: dict[str, dict[str, np.ndarray]]
     input_name: str
     screened: int
+    sigma: dict[str, float] = field(default_factory=dict)
 
     @property
     def expected_chi2(self) -> float:
@@ -145,6 +148,7 @@ class Discrimination:
             "expected_chi2": round(lam, 4),
             "expected_p_value": float(chi2_dist.sf(lam, 1)),
             "screened": self.screened,
+            "noise_sigma": dict(self.sigma),
             "time": _digits(self.time),
             "predictions": {
                 h: {o: _digits(y) for o, y in ys.items()} for h, ys in self.predictions.items()
@@ -171,6 +175,7 @@ def discrimination_from_dict(doc: Mapping[str, Any]) -> Discrimination:
         },
         input_name=str(experiment["input_variable"]),
         screened=int(doc["screened"]),
+        sigma={str(o): float(v) for o, v in (doc.get("noise_sigma") or {}).items()},
     )
 
 
@@ -258,8 +263,9 @@ def discriminating_experiment(
             best = (min(sep.values()), trials[k], sep, pred)
     assert best is not None
     _, trial, sep, pred = best
+    sigma = {o: space.outputs[o].sigma for o in trial.outputs}
     return Discrimination(
-        trial, (a.name, b.name), sep, output_times(trial), pred, space.input, len(trials)
+        trial, (a.name, b.name), sep, output_times(trial), pred, space.input, len(trials), sigma
     )
 
 

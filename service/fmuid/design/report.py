@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from fmuid.design.discriminate import Discrimination
 from fmuid.design.result import DesignResult
 from fmuid.design.signals import input_signal
-from fmuid.report.page import HtmlPage, interval
+from fmuid.report.page import HtmlPage, fmt, interval
 
 
 def widths_figure(result: DesignResult, ax: Axes | None = None, top: int = 4) -> Figure:
@@ -57,12 +57,56 @@ def discrimination_figure(result: Discrimination, ax: Axes | None = None) -> Fig
     axes[0].set_ylabel(result.input_name)
     axes[0].set_title(f"{result.trial.label}: expected chi2 separation {result.expected_chi2:.3g}")
     for a, o in zip(axes[1:], outputs, strict=True):
-        for name, pred in result.predictions.items():
-            a.plot(result.time, pred[o], label=name)
+        for k, (name, pred) in enumerate(result.predictions.items()):
+            line = a.plot(result.time, pred[o], label=name)[0]
+            if k == 0 and o in result.sigma:
+                band = (pred[o] - result.sigma[o], pred[o] + result.sigma[o])
+                a.fill_between(result.time, *band, color=line.get_color(), alpha=0.2, lw=0,
+                               label=f"{name} \u00b1 noise sigma")  # fmt: skip
         a.set_ylabel(o)
         a.legend(fontsize="small")
     axes[-1].set_xlabel("time [s]")
     return fig
+
+
+def discrimination_section(page: HtmlPage, result: Discrimination) -> None:
+    """Add the proposed test to a page: its settings, the expected separation, noise, figure."""
+    a, b = result.hypotheses
+    doc = result.to_dict()
+    page.heading(f"The test that tells {a} from {b}")
+    page.paragraph(
+        f"Proposed: {result.trial.label}, driving {result.input_name}, measuring "
+        f"{', '.join(result.trial.outputs)} ({result.screened} tests screened). Fitted to data "
+        f"made by the other, the wrong hypothesis is expected to miss by chi2 = "
+        f"{fmt(result.expected_chi2)} at the stated noise (a likelihood-ratio statistic of that "
+        f"size has p = {fmt(doc['expected_p_value'], 2)})."
+    )
+    page.table(
+        ["fit", "expected chi2 (noise-free data)"],
+        [[name, value] for name, value in result.separation.items()],
+        table_id="separation",
+        caption="Weighted misfit of each hypothesis fitted to the other's prediction",
+    )
+    page.table(
+        ["sensor", "noise sigma"],
+        [[o, result.sigma.get(o)] for o in result.trial.outputs],
+        table_id="noise",
+        caption="Noise the separation is computed at (the unit of each output)",
+    )
+    page.figure(
+        discrimination_figure(result),
+        "discrimination",
+        f"Input of the proposed test and both hypotheses' predictions under it ({a} with its "
+        "noise band)",
+    )
+
+
+def write_discrimination_report(result: Discrimination, directory: Path) -> Path:
+    """Write ``index.html`` of a discrimination proposal (:func:`discrimination_section`)."""
+    a, b = result.hypotheses
+    page = HtmlPage(Path(directory), f"Model discrimination: {a} versus {b}")
+    discrimination_section(page, result)
+    return page.write()
 
 
 def write_design_report(result: DesignResult, directory: Path) -> Path:

@@ -1,9 +1,10 @@
 """Keeping the data folder bounded: the service lease, job removal, retention, disk room.
 
 Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``),
-``logs/<id>.log`` and :func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and
-work folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
-refers to them any more.
+``logs/<id>.log``, ``checkpoints/<id>/`` (a design's finished evaluations) and
+:func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and work folders).
+Blobs (uploads by content hash) are shared between jobs and removed when no job refers to them
+any more.
 """
 
 from __future__ import annotations
@@ -40,7 +41,17 @@ def job_files(data_dir: Path, job_id: str) -> list[Path]:
         reports / f"{job_id}.tmp",
         data_dir / "logs" / f"{job_id}.log",
         job_tmp_dir(data_dir, job_id),
+        checkpoint_dir(data_dir, job_id),
     ]
+
+
+def checkpoint_dir(data_dir: Path, job_id: str) -> Path:
+    """Return the folder of a job's finished evaluations, kept across restarts of the service.
+
+    The job process removes it once the job has an outcome; :func:`remove_orphans` sweeps the
+    folders of jobs that are gone or finished (a job killed at its time limit).
+    """
+    return data_dir / "checkpoints" / job_id
 
 
 def job_tmp_root(data_dir: Path) -> Path:
@@ -182,6 +193,10 @@ def remove_orphans(store: JobStore, data_dir: Path, alive: set[str]) -> None:
         for path in folder.glob("*") if folder.is_dir() else []:
             if path.name.split(".")[0] not in ids:
                 remove_paths([path])
+    checkpoints = data_dir / "checkpoints"
+    for path in checkpoints.iterdir() if checkpoints.is_dir() else []:
+        if ids.get(path.name) not in ("queued", "running"):
+            remove_paths([path])
     tmp_root = job_tmp_root(data_dir)
     for path in tmp_root.iterdir() if tmp_root.is_dir() else []:
         if path.name not in alive:

@@ -28,6 +28,7 @@ import threading
 import time
 import traceback
 import zipfile
+from collections.abc import Iterator
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack
 from pathlib import Path
@@ -35,6 +36,7 @@ from typing import Any
 
 from fmuid.errors import FmuidError
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
+from fmuid.jobs.housekeeping import checkpoint_dir
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -131,10 +133,12 @@ def run_engine(
     spec: Any,
     progress: ProgressWriter,
     dask_scheduler: str | None,
+    checkpoint: Path | None = None,
 ) -> Any:
     """Call ``fmuid.fit``, ``profile``, ``diagnose`` or ``design`` and return its result.
 
-    For ``design``, ``experiments`` holds the experiment space instead of datasets.
+    For ``design``, ``experiments`` holds the experiment space instead of datasets, and
+    ``checkpoint`` the folder that keeps its finished evaluations across restarts.
     """
     import fmuid
 
@@ -153,7 +157,10 @@ def run_engine(
                         f"cannot reach the dask scheduler at {dask_scheduler}: {exc}"
                     ) from exc
             if kind == "design":
-                return fmuid.design(fmu, spec, experiments[0], progress=progress, executor=executor)
+                return fmuid.design(
+                    fmu, spec, experiments[0], progress=progress, executor=executor,
+                    checkpoint=checkpoint,
+                )  # fmt: skip
             return fmuid.profile(fmu, experiments, spec, progress=progress, executor=executor)
     return fmuid.diagnose(fmu, experiments, spec, progress=progress)
 
@@ -189,7 +196,13 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
     from fmuid.data import load_experiment, spec_from_json
 
     progress = ProgressWriter(store, job.id)
-    with tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp:
+    # a design keeps its finished evaluations here until the job has an outcome: a job
+    # re-run after a restart of the service resumes from them
+    checkpoint = checkpoint_dir(store.blob_dir.parent, job.id)
+    with (
+        tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp,
+        _removed_after(checkpoint),
+    ):
         try:
             fmu, data = stage_inputs(store, job, Path(tmp))
             _log_fmi_version(fmu)
@@ -201,7 +214,7 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
                 experiments.append(load_space(data[0]))
             else:
                 experiments.extend(load_experiment(path) for path in data)
-            result = run_engine(job.kind, fmu, experiments, spec, progress, dask)
+            result = run_engine(job.kind, fmu, experiments, spec, progress, dask, checkpoint)
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:
             store.fail(job.id, str(exc))
@@ -236,6 +249,16 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
             return 0
         write_report(result, report_dir / job.id, fmu, experiments, spec)
     return 0
+
+
+@contextlib.contextmanager
+def _removed_after(folder: Path) -> Iterator[None]:
+    """Remove ``folder`` when the block ends normally (the job has its outcome).
+
+    Not when the process is killed or an exception escapes: the next run resumes from it.
+    """
+    yield
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def _log_fmi_version(fmu: Path) -> None:

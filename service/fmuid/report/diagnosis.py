@@ -6,7 +6,7 @@ import logging
 from typing import Any
 
 from fmuid.design.discriminate import discrimination_from_dict
-from fmuid.design.report import discrimination_figure
+from fmuid.design.report import discrimination_section
 from fmuid.diagnose.catalogue import study_catalogue
 from fmuid.diagnose.plots import figures as diagnose_figures
 from fmuid.diagnose.result import verdict
@@ -200,31 +200,8 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
 
 def _settling_test(page: HtmlPage, proposal: dict[str, Any] | None) -> None:
     """Add the test that would settle a tie, with both explanations' predictions under it."""
-    if not proposal:
-        return
-    found = discrimination_from_dict(proposal)
-    experiment = proposal["experiment"]
-    settings = ", ".join(f"{k} {fmt(v, 3)}" for k, v in experiment["settings"].items())
-    page.heading("A test that would settle the tie")
-    page.table(
-        ["quantity", "value"],
-        [
-            ["input", f"{experiment['input']} of {experiment['input_variable']} ({settings})"],
-            ["duration [s]", experiment["duration"]],
-            ["sampling rate [Hz]", experiment["rate_hz"]],
-            ["outputs measured", ", ".join(experiment["outputs"])],
-            ["hypotheses", " vs ".join(found.hypotheses)],
-            *[[f"chi2 of {k}", v] for k, v in found.separation.items()],
-            ["expected p-value of the likelihood-ratio test", proposal["expected_p_value"]],
-            ["tests screened", found.screened],
-        ],
-        table_id="settling_test",
-    )
-    page.figure(
-        discrimination_figure(found),
-        "diagnose_settling_test",
-        "The proposed input and both explanations' noise-free predictions under it.",
-    )
+    if proposal:
+        discrimination_section(page, discrimination_from_dict(proposal))
 
 
 def _units(problem: Problem | None) -> dict[str, str]:
