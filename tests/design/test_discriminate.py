@@ -9,10 +9,10 @@ from scipy.stats import chi2
 from fmuid.data import ParameterSpec, experiment_from_arrays, spec_from_json
 from fmuid.design import space_from_json
 from fmuid.design.discriminate import Hypothesis, default_space, discriminating_experiment
-from fmuid.design.report import discrimination_figure, write_discrimination_report
 from fmuid.fit.optimize import fit_problem
 from fmuid.fit.problem import Problem
 from fmuid.model.builtin import builtin_fmu
+from fmuid.report.design import discrimination_figure, write_discrimination_report
 
 TAU = 0.3
 SPACE = {

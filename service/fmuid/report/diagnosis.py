@@ -6,13 +6,13 @@ import logging
 from typing import Any
 
 from fmuid.design.discriminate import discrimination_from_dict
-from fmuid.design.report import discrimination_section
 from fmuid.diagnose.catalogue import study_catalogue
 from fmuid.diagnose.plots import figures as diagnose_figures
 from fmuid.diagnose.result import verdict
 from fmuid.diagnose.series import diagnosis_series
 from fmuid.errors import FmuidError
 from fmuid.fit.problem import Problem
+from fmuid.report.design import discrimination_section
 from fmuid.report.page import HtmlPage, fmt, interval
 
 logger = logging.getLogger(__name__)
