@@ -36,7 +36,7 @@ CONFIRM_BELOW = 4.0
 at least the settling level's chi2 (10.8) over this factor: a linearised estimate four times
 too small to settle the tie does not pay for the full fits."""
 
-CANDIDATES = 4
+CANDIDATES = 2
 """Tests sampled per input family (step, chirp, multisine) for each tie: the screen's cost
 (about 2 (n + 2) simulations per test) stays a fraction of the diagnosis."""
 
