@@ -97,7 +97,8 @@ def run(url: str, csv: Path, n_jobs: int, workers: int) -> None:
                 data={"kind": "fit", "spec": SPEC, "model": "msd"},
                 files=[("data", ("step.csv", content, "text/csv"))],
             )
-            r.raise_for_status()
+            if r.status_code != 202:
+                raise RuntimeError(f"submission answered {r.status_code}: {r.text}")
             return str(r.json()["id"])
 
     t0 = time.monotonic()

@@ -175,7 +175,8 @@ def remove_unused_blobs(store: JobStore, data_dir: Path) -> None:
 def remove_orphans(store: JobStore, data_dir: Path, alive: set[str]) -> None:
     """Remove job files whose job is gone, and work folders of jobs without a live process.
 
-    ``alive`` holds the jobs whose process runs (a done job's process may still draw its report).
+    ``alive`` holds the jobs whose process runs; the work folder ``<id>.report`` of a report
+    being drawn (its marker ``reports/<id>.tmp`` exists) is kept too.
     """
     ids = {row[0]: row[1] for row in store.connection().execute("SELECT id, status FROM jobs")}
     for folder in (data_dir / "reports", data_dir / "logs"):
@@ -184,7 +185,8 @@ def remove_orphans(store: JobStore, data_dir: Path, alive: set[str]) -> None:
                 remove_paths([path])
     tmp_root = job_tmp_root(data_dir)
     for path in tmp_root.iterdir() if tmp_root.is_dir() else []:
-        if path.name not in alive:
+        job_id = path.name.split(".")[0]
+        if path.name not in alive and not (data_dir / "reports" / f"{job_id}.tmp").is_dir():
             remove_paths([path])
 
 

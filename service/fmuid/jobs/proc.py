@@ -108,14 +108,15 @@ def end_processes(pids: list[int], timeout: float = 10.0) -> list[int]:
     deadline = time.monotonic() + timeout
     left = pids
     while left:
-        left = [pid for pid in left if _alive(pid)]
+        left = [pid for pid in left if is_alive(pid)]
         if not left or time.monotonic() > deadline:
             break
         time.sleep(0.05)
     return left
 
 
-def _alive(pid: int) -> bool:
+def is_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists and is not a zombie."""
     try:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
