@@ -21,6 +21,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from fmuid.jobs.proc import JOB_NICENESS
 from fmuid.jobs.store import JobStore
 from fmuid.profile.pool_guard import die_with_pool_owner
 
@@ -98,6 +99,7 @@ def forked_drawing(arguments: tuple[Path, Path, str, int], work: Path, service_p
     """Body of a drawing process: its own session, the job's log, ``work`` as TMPDIR."""
     os.setsid()
     die_with_pool_owner(service_pid)
+    os.nice(JOB_NICENESS)
     _, data_dir, job_id, _ = arguments
     log = os.open(
         data_dir / "logs" / f"{job_id}.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from fmuid.jobs.proc import JOB_DB_ENV, is_alive, job_command, job_environment
+from fmuid.jobs.proc import JOB_DB_ENV, JOB_NICENESS, is_alive, job_command, job_environment
 from fmuid.profile.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 
 logger = logging.getLogger(__name__)
@@ -222,6 +222,7 @@ def forked_job(launch: Launch, service_pid: int) -> None:
     """
     os.setsid()
     die_with_pool_owner(service_pid)
+    os.nice(JOB_NICENESS)
     log = os.open(launch.log_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
     os.dup2(log, 1)
     os.dup2(log, 2)
