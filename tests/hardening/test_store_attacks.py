@@ -16,6 +16,7 @@ from pathlib import Path
 import httpx
 import pytest
 from api_helpers import msd_spec
+
 from input_attacks import HealthWatch
 
 pytestmark = pytest.mark.slow
@@ -48,9 +49,7 @@ def health(service) -> dict:
     return answer.json()
 
 
-def test_queue_limit_answers_429_naming_it(
-    service_factory, step_csv, test_fmus, health_bound_of
-):
+def test_queue_limit_answers_429_naming_it(service_factory, step_csv, test_fmus, health_bound_of):
     service = service_factory(FMUID_QUEUE_LIMIT="2", FMUID_JOB_TIMEOUT_S="120")
     client = service.client()
     bound = health_bound_of(service.url)
