@@ -5,9 +5,10 @@ the slowest of those answers must stay under 100 ms. The bound is asserted as su
 machine is quiet enough for it to mean something: the idle service, measured for 1 s just before
 each attack, answered every poll within 30 ms and the load is under 0.5 per core (``QUIET_S``,
 ``QUIET_LOAD`` in conftest). On a loaded machine (a shared CI runner, where the scheduler alone
-delays an idle service by up to ~0.1 s) the attack may add at most 100 ms to twice the idle worst instead; an upload parsed in the service
-held health for 5-30 s, which fails either bound. Both numbers are recorded in the test report
-(``record_property``), and ``bench/load.py`` prints health latency under load. The attacks: a
+delays an idle service by up to ~0.1 s) the attack may add at most 100 ms to twice the idle
+worst instead; an upload parsed in the service held health for 5-30 s, which fails either
+bound. Both numbers are recorded in the test report (``record_property``), and
+``bench/load.py`` prints health latency under load. The attacks: a
 number cell that makes a backtracking pattern take minutes, a 20k-column header, a spec with 20k
 keys, a spec nested 100k deep, an FMU whose modelDescription lists a million variables (and one
 just over the variable limit), an FMU with a corrupt member, and FMUs whose binary sleeps or
