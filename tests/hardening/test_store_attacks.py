@@ -103,7 +103,9 @@ def test_the_result_is_kept_when_the_report_cannot_be_drawn(service_factory, ste
     assert client.wait(job, timeout=300)["status"] == "done"
     assert client.result(job)["parameters"]["k"]["estimate"] == pytest.approx(4.4, rel=0.05)
     answer = httpx.get(f"{service.url}/v1/jobs/{job}/report", timeout=10)
-    assert answer.status_code >= 400 and "detail" in answer.json()
+    assert answer.status_code == 503, answer.text
+    assert "cannot make the folder of the reports" in answer.json()["detail"]
+    assert client.status(job)["status"] == "done"
 
 
 def test_a_damaged_database_makes_health_degraded_and_errors_json(

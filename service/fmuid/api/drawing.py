@@ -53,7 +53,7 @@ class ReportDrawer:
     def __init__(self, settings: Settings, warm: WarmServer):
         self.settings = settings
         self.warm = warm
-        self._drawing: dict[str, asyncio.Task[None]] = {}
+        self._drawing: dict[str, asyncio.Task[str | None]] = {}
 
     async def report_dir(self, job_id: str) -> Path:
         """Return the folder of the report of done job ``job_id``, drawing it first if needed.
@@ -71,27 +71,34 @@ class ReportDrawer:
                 task = asyncio.ensure_future(anyio.to_thread.run_sync(self._draw, job_id))
                 self._drawing[job_id] = task
                 task.add_done_callback(lambda _: self._drawing.pop(job_id, None))
-            await asyncio.shield(task)
+            reason = await asyncio.shield(task)
+            if reason is not None:
+                raise DrawingFailed(reason)
         if error.is_file():
             raise DrawingFailed(error.read_text(errors="replace"))
         if not (directory / "index.html").is_file():
             raise DrawingFailed("the drawing process wrote no report")
         return directory
 
-    def _draw(self, job_id: str) -> None:
-        """Draw in a process unless another drawer holds the marker; then wait for it."""
+    def _draw(self, job_id: str) -> str | None:
+        """Draw in a process unless another drawer holds the marker (then wait for it).
+
+        Returns the reason when not even the marker could be made (nowhere to write it).
+        """
         directory, marker, error = report_paths(self.settings.data_dir, job_id)
         try:
             marker.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            return f"cannot make the folder of the reports {marker.parent}: {exc}"
+        try:
             marker.mkdir()
         except FileExistsError:
             deadline = time.monotonic() + DRAW_TIMEOUT_S
             while marker.is_dir() and time.monotonic() < deadline:
                 time.sleep(MARKER_POLL_S)
-            return
+            return None
         except OSError as exc:
-            self._fail(error, f"cannot make the report folder: {exc}")
-            return
+            return f"cannot make the report folder {marker}: {exc}"
         work = job_tmp_root(self.settings.data_dir) / f"{job_id}.report"
         try:
             work.mkdir(parents=True, exist_ok=True)
@@ -110,6 +117,7 @@ class ReportDrawer:
             if not directory.is_dir():
                 shutil.rmtree(marker, ignore_errors=True)
             remove_paths([work])
+        return None
 
     def _arguments(self, job_id: str) -> tuple[Path, Path, str, int]:
         s = self.settings
