@@ -6,7 +6,9 @@ A job stores its result and ends; nothing draws until someone asks for the repor
 forked by the warm server (matplotlib is imported there already). That process reads the result,
 the FMU, the data and the spec back from the store, draws into the marker folder and renames it
 to ``reports/<id>/``; when drawing fails it writes the reason to ``reports/<id>.error`` instead.
-The job's row is never touched: a report that cannot be drawn leaves the job ``done``.
+The job's row is never touched: a report that cannot be drawn leaves the job ``done``. A result
+whose JSON cannot be read back into its object (a design result) is kept pickled beside the
+reports by the job (:func:`keep_result`) for its drawing.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import contextlib
 import json
 import logging
 import os
+import pickle
 import shutil
 import sys
 import tempfile
@@ -26,6 +29,41 @@ from fmuid.jobs.store import JobStore
 from fmuid.profile.pool_guard import die_with_pool_owner
 
 logger = logging.getLogger(__name__)
+
+
+def result_copy(data_dir: Path, job_id: str) -> Path:
+    """Return where a job keeps its result object when its JSON cannot be read back."""
+    return data_dir / "reports" / f"{job_id}.pickle"
+
+
+def keep_result(result: Any, result_json: str, data_dir: Path, job_id: str) -> None:
+    """Keep a pickled copy of ``result`` when its JSON cannot be read back (a design result).
+
+    Only this service writes the file, beside its reports, and only its drawing reads it.
+    """
+    from fmuid.errors import SpecError
+    from fmuid.results import result_from_dict
+
+    try:
+        result_from_dict(json.loads(result_json))
+    except SpecError:
+        path = result_copy(data_dir, job_id)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(pickle.dumps(result))
+
+
+def _stored_result(text: str, data_dir: Path, job_id: str) -> Any:
+    """Return a job's result object: from its JSON, or from the copy of :func:`keep_result`."""
+    from fmuid.errors import SpecError
+    from fmuid.results import result_from_dict
+
+    try:
+        return result_from_dict(json.loads(text))
+    except SpecError:
+        copy = result_copy(data_dir, job_id)
+        if not copy.is_file():
+            raise
+        return pickle.loads(copy.read_bytes())  # written by this service's job
 
 
 def report_paths(data_dir: Path, job_id: str) -> tuple[Path, Path, Path]:
@@ -66,7 +104,6 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
     """
     from fmuid.data import load_experiment, spec_from_json
     from fmuid.jobs.run import limit_process, stage_inputs
-    from fmuid.results import result_from_dict
 
     directory, tmp, error_file = report_paths(data_dir, job_id)
     logger.info("drawing the report of job %s", job_id)
@@ -86,7 +123,7 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
                 experiments: list[Any] = [load_space(data[0])]
             else:
                 experiments = [load_experiment(path) for path in data]
-            result = result_from_dict(json.loads(text))
+            result = _stored_result(text, data_dir, job_id)
             write_report(result, directory, fmu, experiments, spec)
     except Exception as exc:  # reading the job back failed: say why, the job stays done
         logger.exception("report of %s failed", job_id)

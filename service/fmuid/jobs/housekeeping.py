@@ -1,8 +1,8 @@
 """Keeping the data folder bounded: the service lease, job removal, retention, disk room.
 
-Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``),
-``logs/<id>.log`` and :func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and
-work folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
+Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``,
+``<id>.pickle``), ``logs/<id>.log`` and :func:`job_tmp_dir` (the job processes' ``TMPDIR``:
+extracted FMU copies and work folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
 refers to them any more.
 """
 
@@ -38,6 +38,7 @@ def job_files(data_dir: Path, job_id: str) -> list[Path]:
         reports / job_id,
         reports / f"{job_id}.error",
         reports / f"{job_id}.tmp",
+        reports / f"{job_id}.pickle",
         data_dir / "logs" / f"{job_id}.log",
         job_tmp_dir(data_dir, job_id),
     ]

@@ -33,6 +33,7 @@ from typing import Any
 
 from fmuid.errors import FmuidError
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
+from fmuid.jobs.draw import keep_result
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -203,6 +204,11 @@ def run_job(store: JobStore, job: Job, memory_mb: int, dask: str | None) -> int:
             return 1
         if not stored:
             logger.info("job %s was cancelled before it finished", job.id)
+            return 0
+        try:
+            keep_result(result, result_json, store.blob_dir.parent, job.id)
+        except Exception:  # the result is stored; only its report will be missing
+            logger.exception("job %s: could not keep the result object for its report", job.id)
     return 0
 
 
