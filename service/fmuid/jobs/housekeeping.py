@@ -2,8 +2,8 @@
 
 Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``,
 ``<id>.pickle``), ``logs/<id>.log`` and :func:`job_tmp_dir` (the job processes' ``TMPDIR``:
-extracted FMU copies and work folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
-refers to them any more.
+extracted FMU copies and work folders). Blobs (uploads by content hash) are shared between
+jobs and removed when no job refers to them any more.
 """
 
 from __future__ import annotations
