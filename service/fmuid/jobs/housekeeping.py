@@ -38,9 +38,9 @@ def job_files(data_dir: Path, job_id: str) -> list[Path]:
         reports / job_id,
         reports / f"{job_id}.error",
         reports / f"{job_id}.tmp",
-        reports / f"{job_id}.pickle",
         data_dir / "logs" / f"{job_id}.log",
         job_tmp_dir(data_dir, job_id),
+        reports / f"{job_id}.pickle",
     ]
 
 
