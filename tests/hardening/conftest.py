@@ -28,8 +28,9 @@ HEALTH_S = 0.1
 """The documented bound on health's answer during an attack [s]."""
 QUIET_S = 0.03
 """Slowest health answer of the idle service on a machine quiet enough for :data:`HEALTH_S`."""
-QUIET_LOAD = 0.5
-"""Largest load average per core (over the last minute) of a machine quiet enough for it."""
+QUIET_LOAD = 1.0
+"""Largest load average per core (over the last minute) of a machine quiet enough for it: no
+more runnable processes than cores, on average."""
 
 
 class HealthBound:
