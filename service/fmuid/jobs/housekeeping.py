@@ -1,10 +1,10 @@
 """Keeping the data folder bounded: the service lease, job removal, retention, disk room.
 
-Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``),
-``logs/<id>.log``, ``checkpoints/<id>/`` (a design's finished evaluations) and
-:func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and work folders).
-Blobs (uploads by content hash) are shared between jobs and removed when no job refers to them
-any more.
+Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``,
+``<id>.pickle``), ``logs/<id>.log``, ``checkpoints/<id>/`` (a design's finished evaluations)
+and :func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and work
+folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
+refers to them any more.
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ def job_files(data_dir: Path, job_id: str) -> list[Path]:
         data_dir / "logs" / f"{job_id}.log",
         job_tmp_dir(data_dir, job_id),
         checkpoint_dir(data_dir, job_id),
+        reports / f"{job_id}.pickle",
     ]
 
 
@@ -186,7 +187,8 @@ def remove_unused_blobs(store: JobStore, data_dir: Path) -> None:
 def remove_orphans(store: JobStore, data_dir: Path, alive: set[str]) -> None:
     """Remove job files whose job is gone, and work folders of jobs without a live process.
 
-    ``alive`` holds the jobs whose process runs (a done job's process may still draw its report).
+    ``alive`` holds the jobs whose process runs; the work folder ``<id>.report`` of a report
+    being drawn (its marker ``reports/<id>.tmp`` exists) is kept too.
     """
     ids = {row[0]: row[1] for row in store.connection().execute("SELECT id, status FROM jobs")}
     for folder in (data_dir / "reports", data_dir / "logs"):
@@ -199,7 +201,8 @@ def remove_orphans(store: JobStore, data_dir: Path, alive: set[str]) -> None:
             remove_paths([path])
     tmp_root = job_tmp_root(data_dir)
     for path in tmp_root.iterdir() if tmp_root.is_dir() else []:
-        if path.name not in alive:
+        job_id = path.name.split(".")[0]
+        if path.name not in alive and not (data_dir / "reports" / f"{job_id}.tmp").is_dir():
             remove_paths([path])
 
 
