@@ -6,10 +6,15 @@ eq. 3.28), ``fmuid design`` screens step, ramp, chirp, multisine and double-lane
 rates; the best designs are verified by profiles on fresh simulated data. The thesis ramp
 (5 Hz, 10 s) is profiled on the same number of draws, and the table compares the median 68 %
 simultaneous CI widths (decades) and their geometric mean over the six parameters. Screen and
-verification are timed separately. ``--sensors`` also asks which sensor added to the yaw rates
-helps most, ``--masses`` what freeing masses and inertias costs (Fisher screen only).
+verification are timed separately; one task is one screened trial or one verified design on one
+noise draw, on ``--workers`` local processes, and with ``--dask`` again on a dask LocalCluster of
+2 separate worker processes (1 thread each), whose numbers must equal the local run's (the ramp
+is profiled once, locally).
+``--sensors`` also asks which sensor added to the yaw rates helps most, ``--masses`` what freeing
+masses and inertias costs (Fisher screen only).
 
     PYTHONPATH=service python bench/design.py --snr 25 --draws 5 [--workers 2] [--dask]
+    PYTHONPATH=service python bench/design.py --snr 25 --draws 2 --candidates 4 --dask
     PYTHONPATH=service python bench/design.py --no-study --sensors --masses
 """
 
@@ -96,23 +101,28 @@ def geo(widths: dict[str, float]) -> float:
     return float(np.exp(np.mean(np.log(w))))
 
 
-def study(fmu, snr: float, args: argparse.Namespace, executor) -> None:
+def run_study(fmu, spec, space, args, executor) -> tuple:
+    """The design study (on the local pool, or on ``executor``) and its wall time [s]."""
+    workers = args.workers if executor is None else None
+    t0 = time.perf_counter()
+    result = design(fmu, spec, space, workers=workers, executor=executor)
+    return result, time.perf_counter() - t0
+
+
+def study(fmu, snr: float, args: argparse.Namespace, cluster) -> None:
     sigma = ramp_sigma(fmu, snr)
     spec, space = make_spec(), make_space(sigma, args)
-    t0 = time.perf_counter()
-    result = design(fmu, spec, space, workers=args.workers, executor=executor)
-    total = time.perf_counter() - t0
-    print(f"screen done; best screened: {result.designs[0].trial.label}", flush=True)
-    best = result.best
+    result, total = run_study(fmu, spec, space, args, None)
     t1 = time.perf_counter()
-    ramp = verify(FmuModel(fmu), spec, space, RAMP, seed=7, workers=args.workers, executor=executor)
+    ramp = verify(FmuModel(fmu), spec, space, RAMP, seed=7, workers=args.workers)
     t_ramp = time.perf_counter() - t1
+    best = result.best
     stage = result.stage_seconds
     print(f"\n## SNR {snr:g} (sigma {sigma:.4g} rad/s), {result.screened} designs screened")
     print(
         f"screen {stage['screen_seconds']:.1f} s, verification of {args.verify} design(s) x "
         f"{args.draws} draws {stage['verify_seconds']:.1f} s (total {total:.1f} s); "
-        f"ramp profiles {t_ramp:.1f} s"
+        f"ramp profiles {t_ramp:.1f} s ({args.workers} local worker(s))"
     )
     print(f"recommended: {best.trial.label}")
     print(
@@ -131,6 +141,26 @@ def study(fmu, snr: float, args: argparse.Namespace, executor) -> None:
             f"| {r:.4f} | {count}/{args.draws} | {rmp[n] / r:.2f} |"
         )
     print(f"| geometric mean | {geo(rmp):.4f} | | | {geo(rec):.4f} | | {geo(rmp) / geo(rec):.2f} |")
+    if cluster is None:
+        return
+    from distributed import Client
+
+    with Client(cluster) as client:
+        remote, total_d = run_study(fmu, spec, space, args, client)
+    same = _numbers(remote) == _numbers(result)
+    print(f"\n### Executors (SNR {snr:g}): wall times [s]; same ranking and numbers: {same}")
+    print("| executor | screen | verification | total |\n|---|---|---|---|")
+    for name, r, t in (
+        (f"local pool, {args.workers} process(es)", result, total),
+        ("dask LocalCluster, 2 worker processes x 1 thread", remote, total_d),
+    ):
+        st = r.stage_seconds
+        print(f"| {name} | {st['screen_seconds']:.1f} | {st['verify_seconds']:.1f} | {t:.1f} |")
+
+
+def _numbers(result) -> dict:
+    doc = result.to_dict()
+    return {**doc, "cost": doc["cost"]["simulations"]}
 
 
 def sensors(fmu, snr: float, args: argparse.Namespace) -> None:
@@ -167,30 +197,34 @@ def main() -> None:
     parser.add_argument("--verify", type=int, default=1, help="designs verified by profiles")
     parser.add_argument("--candidates", type=int, default=12, help="designs per family and rate")
     parser.add_argument("--points", type=int, default=4, help="prior-box points of the screen")
-    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--workers", type=int, default=2, help="local worker processes")
     parser.add_argument(
-        "--dask", action="store_true", help="verify on a local dask cluster (2 processes)"
+        "--dask",
+        action="store_true",
+        help="run the study again on a local dask cluster of 2 worker processes and compare",
     )
     parser.add_argument("--no-study", action="store_true", help="skip the verified SNR study")
     parser.add_argument("--sensors", action="store_true")
     parser.add_argument("--masses", action="store_true")
     args = parser.parse_args()
     fmu = builtin_fmu("tractor_implement")
-    executor = None
+    cluster = None
     if args.dask:
-        from distributed import Client, LocalCluster
+        from distributed import LocalCluster
 
-        executor = Client(LocalCluster(n_workers=2, threads_per_worker=1, processes=True))
+        cluster = LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        )
     try:
         for snr in [] if args.no_study else args.snr:
-            study(fmu, snr, args, executor)
+            study(fmu, snr, args, cluster)
         if args.sensors:
             sensors(fmu, args.snr[0], args)
         if args.masses:
             masses(fmu, args.snr[0], args)
     finally:
-        if executor is not None:
-            executor.close()
+        if cluster is not None:
+            cluster.close()
 
 
 if __name__ == "__main__":

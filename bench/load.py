@@ -1,12 +1,19 @@
-"""Load test of the service: many small jobs at once, status latency while workers are busy.
+"""Load test of the service: many small jobs, status latency under heavy jobs and big uploads.
 
-Starts ``python -m fmuid.api`` on a free loopback port with a fresh data folder, submits N small
-``fit`` jobs (built-in ``msd`` model, trust-region only) from N threads at once, polls
-``GET /v1/jobs/{id}`` and ``/v1/health`` until all finish, and prints a table: jobs/min, p50/p99
-status latency, the deepest queue seen and worker utilisation (job-process busy time over
-workers x wall time).
+Starts ``python -m fmuid.api`` on a free loopback port with a fresh data folder, then
 
-    python bench/load.py [--jobs 50] [--workers 2]
+1. submits N small ``fit`` jobs (built-in ``msd`` model, trust-region only) from N threads at
+   once, polls ``GET /v1/jobs/{id}`` and ``/v1/health`` until all finish: jobs/min, p50/p99
+   status latency, the deepest queue seen and worker utilisation (job-process busy time over
+   workers x wall time);
+2. submits 2 heavy jobs (``msd`` profiles with a global search) and polls their status for
+   ``--heavy-s`` seconds while they run: p50/p99/max status latency, then cancels them;
+3. posts ``--uploads`` bodies of 45 MB (refused: they are no FMU) while health is polled:
+   p99/max health latency during the uploads.
+
+The load of the machine (``/proc/loadavg``) before and after is printed with the table.
+
+    python bench/load.py [--jobs 50] [--workers 2] [--heavy-s 20] [--uploads 3]
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from datetime import datetime
 from pathlib import Path
+from typing import Any
 
 import httpx
 import numpy as np
@@ -41,11 +49,11 @@ SPEC = json.dumps(
 )
 
 
-def write_csv(path: Path) -> None:
-    t = np.arange(0.0, 10.0 + 1e-9, 0.2)
+def write_csv(path: Path, end: float = 10.0, step: float = 0.2) -> None:
+    t = np.arange(0.0, end + 1e-9, step)
     sol = solve_ivp(
         lambda _t, y: [y[1], (40.0 - 1.6 * y[1] - 4.4 * y[0]) / 1.1],
-        (0.0, 10.0), [0.0, 0.0], t_eval=t, rtol=1e-10,
+        (0.0, end), [0.0, 0.0], t_eval=t, rtol=1e-10,
     )  # fmt: skip
     x = sol.y[0] + np.random.default_rng(0).normal(0.0, 0.2, t.size)
     path.write_text("time,f,x\n" + "".join(f"{a:.6g},40,{b:.9g}\n" for a, b in zip(t, x)))
@@ -74,20 +82,116 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--jobs", type=int, default=50)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--heavy-s", type=float, default=20.0)
+    parser.add_argument("--uploads", type=int, default=3)
     args = parser.parse_args()
+    load_before = Path("/proc/loadavg").read_text().split()[:3]
     with tempfile.TemporaryDirectory(prefix="fmuid-bench-") as tmp:
         data_dir = Path(tmp)
         csv = data_dir / "step.csv"
         write_csv(csv)
         proc, url = start_service(data_dir, args.workers)
         try:
-            run(url, csv, args.jobs, args.workers)
+            rows = small_jobs(url, csv, args.jobs, args.workers)
+            rows += heavy_jobs(url, csv, args.heavy_s)
+            rows += uploads(url, csv, args.uploads)
         finally:
             proc.terminate()
             proc.wait()
+    rows.append(("load average before / after", f"{load_before} / {_load()}"))
+    width = max(len(k) for k, _ in rows)
+    for key, value in rows:
+        print(f"{key:<{width}}  {value}")
 
 
-def run(url: str, csv: Path, n_jobs: int, workers: int) -> None:
+def _load() -> list[str]:
+    return Path("/proc/loadavg").read_text().split()[:3]
+
+
+class Poller:
+    """Poll ``path`` (a callable giving it) every 10 ms in a thread; keep each answer's time."""
+
+    def __init__(self, url: str, path: Any):
+        self.url = url
+        self.path = path
+        self.latencies: list[float] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._poll)
+
+    def _poll(self) -> None:
+        with httpx.Client(base_url=self.url, timeout=30) as client:
+            i = 0
+            while not self._stop.is_set():
+                start = time.perf_counter()
+                client.get(self.path(i)).raise_for_status()
+                self.latencies.append(time.perf_counter() - start)
+                i += 1
+                time.sleep(0.01)
+
+    def __enter__(self) -> Poller:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def row(self, what: str) -> tuple[str, str]:
+        lat = np.array(self.latencies) * 1000
+        p50, p99 = np.percentile(lat, [50, 99])
+        return (f"{what} p50 / p99 / max [ms]", f"{p50:.1f} / {p99:.1f} / {lat.max():.1f}")
+
+
+def heavy_jobs(url: str, csv: Path, seconds: float) -> list[tuple[str, str]]:
+    """Status latency while 2 profile jobs with a global search on 4000 samples run."""
+    spec = json.loads(SPEC)
+    spec["global_search"] = True
+    csv = csv.with_name("long.csv")
+    write_csv(csv, end=80.0, step=0.02)
+    with httpx.Client(base_url=url, timeout=120) as client:
+        ids = []
+        for _ in range(2):
+            r = client.post(
+                "/v1/jobs",
+                data={"kind": "profile", "spec": json.dumps(spec), "model": "msd"},
+                files=[("data", ("step.csv", csv.read_bytes(), "text/csv"))],
+            )
+            ids.append(r.raise_for_status().json()["id"])
+        while client.get("/v1/health").json()["running"] < 2:
+            time.sleep(0.05)
+        with Poller(url, lambda i: f"/v1/jobs/{ids[i % 2]}") as poller:
+            time.sleep(seconds)
+        running = [client.get(f"/v1/jobs/{job}").json()["status"] for job in ids]
+        for job in ids:
+            client.delete(f"/v1/jobs/{job}")
+    return [
+        poller.row(f"status latency, 2 heavy jobs running {seconds:g} s,"),
+        ("heavy jobs running at the end (then cancelled)", f"{running.count('running')} of 2"),
+    ]
+
+
+def uploads(url: str, csv: Path, n: int) -> list[tuple[str, str]]:
+    """Health latency while ``n`` bodies of 45 MB are posted one after another."""
+    blob = np.random.default_rng(0).bytes(45 * 1024 * 1024)
+    statuses = []
+    with Poller(url, lambda _: "/v1/health") as poller, httpx.Client(timeout=300) as client:
+        for _ in range(n):
+            r = client.post(
+                f"{url}/v1/jobs",
+                data={"kind": "fit", "spec": SPEC},
+                files=[
+                    ("fmu", ("big.fmu", blob, "application/octet-stream")),
+                    ("data", ("step.csv", csv.read_bytes(), "text/csv")),
+                ],
+            )
+            statuses.append(r.status_code)
+    return [
+        poller.row(f"health latency, {n} uploads of 45 MB,"),
+        ("upload answers", " ".join(map(str, statuses))),
+    ]
+
+
+def small_jobs(url: str, csv: Path, n_jobs: int, workers: int) -> list[tuple[str, str]]:
     content = csv.read_bytes()
 
     def submit(_: int) -> str:
@@ -97,7 +201,8 @@ def run(url: str, csv: Path, n_jobs: int, workers: int) -> None:
                 data={"kind": "fit", "spec": SPEC, "model": "msd"},
                 files=[("data", ("step.csv", content, "text/csv"))],
             )
-            r.raise_for_status()
+            if r.status_code != 202:
+                raise RuntimeError(f"submission answered {r.status_code}: {r.text}")
             return str(r.json()["id"])
 
     t0 = time.monotonic()
@@ -152,9 +257,7 @@ def run(url: str, csv: Path, n_jobs: int, workers: int) -> None:
         ("workers", f"{workers}"),
         ("worker utilisation", f"{busy / (workers * wall):.0%}"),
     ]
-    width = max(len(k) for k, _ in rows)
-    for key, value in rows:
-        print(f"{key:<{width}}  {value}")
+    return rows
 
 
 if __name__ == "__main__":

@@ -229,10 +229,13 @@ def _cmd_design(args: argparse.Namespace) -> int:
 
     fmu, spec, space = _fmu_path(args.fmu), load_spec(Path(args.spec)), load_space(args.space)
     with ProgressDisplay() as progress:
-        result = design(fmu, spec, space, workers=args.workers, progress=progress)
+        result = design(
+            fmu, spec, space, workers=args.workers, progress=progress,
+            checkpoint=Path(args.checkpoint) if args.checkpoint else None,
+        )  # fmt: skip
     _write_json(Path(args.out), result.to_dict())
     if args.report:
-        from fmuid.design.report import write_design_report
+        from fmuid.report.design import write_design_report
 
         print(f"report: {write_design_report(result, Path(args.report))}")  # noqa: T201
     print(f"recommended: {result.best.trial.label}, sensors {', '.join(result.best.trial.outputs)}")  # noqa: T201
@@ -330,6 +333,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="result JSON")
     p.add_argument("--report", help="write index.html and plots into this folder")
     p.add_argument("--workers", type=int, default=1, help="profile workers of the verification")
+    p.add_argument(
+        "--checkpoint",
+        help="keep finished evaluations in this folder; a re-run with the same inputs resumes",
+    )
     p.set_defaults(func=_cmd_design)
 
     p = sub.add_parser("serve", help="run the HTTP service")

@@ -77,6 +77,10 @@ class Settings(BaseSettings):
     warm_start
         Fork job processes from a server that imported the engine once (milliseconds per job)
         instead of starting a new interpreter per job (seconds).
+    warm_recycle_jobs
+        Processes (jobs and report drawings) one warm server forks before it is replaced by a
+        new one; the old one stops once they have all ended, and jobs start cold meanwhile. A
+        server that crashes is replaced at once; the jobs it took down are queued again.
     max_csv_bytes, max_csv_rows, max_csv_columns, max_cell_chars
         Limits of one uploaded CSV file (see :class:`fmuid.data.InputLimits`).
     max_spec_bytes, max_spec_keys, max_spec_depth
@@ -115,6 +119,7 @@ class Settings(BaseSettings):
     disk_quota_bytes: int = Field(default=0, ge=0)
     min_free_bytes: int = Field(default=100 * 1024 * 1024, ge=0)
     warm_start: bool = True
+    warm_recycle_jobs: int = Field(default=200, ge=1)
     max_csv_bytes: int = Field(default=_INPUT.max_csv_bytes, ge=1)
     max_csv_rows: int = Field(default=_INPUT.max_csv_rows, ge=1)
     max_csv_columns: int = Field(default=_INPUT.max_csv_columns, ge=2)

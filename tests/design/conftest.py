@@ -5,9 +5,10 @@ from __future__ import annotations
 import json
 
 import pytest
-from design_cases import MSD_SPEC, space_of
+from design_cases import MSD_SPEC, SMALL, space_of
 
 from fmuid.data import spec_from_json
+from fmuid.design import design
 
 
 @pytest.fixture
@@ -15,6 +16,12 @@ def msd_space():
     return space_of()
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def msd_spec():
     return spec_from_json(json.dumps(MSD_SPEC))
+
+
+@pytest.fixture(scope="session")
+def serial(msd_spec):
+    """The small study (``SMALL``) evaluated in this process, without a checkpoint."""
+    return design("msd", msd_spec, space_of(**SMALL))

@@ -3,6 +3,9 @@
 import json
 
 from fmuid.design import space_from_json
+from fmuid.design.engine import Screen
+from fmuid.design.verify import DrawTask
+from fmuid.progress import Progress
 
 MSD_SPACE = {
     "input": "f",
@@ -34,3 +37,46 @@ MSD_SPEC = {
 
 def space_of(**changes):
     return space_from_json(json.dumps({**MSD_SPACE, **changes}))
+
+
+SMALL = {"candidates": 2, "draws": 2, "verify_designs": 1, "robust": {"points": 1}}
+"""8 trials (2 families x 2 candidates x 2 rates) and 2 verified draws: 10 evaluations."""
+
+
+def comparable(result_dict):
+    """The result JSON without the wall times, which differ from run to run."""
+    return {**result_dict, "cost": result_dict["cost"]["simulations"]}
+
+
+class Stop(BaseException):
+    """Stands for the end of the process (not caught as an error of the job)."""
+
+
+def counting(monkeypatch):
+    """Count the screen and verification evaluations run in this process."""
+    calls = {"screen": 0, "verify": 0}
+    sens, run = Screen.sensitivities, DrawTask.run
+
+    def sensitivities(self, trial):
+        calls["screen"] += 1
+        return sens(self, trial)
+
+    def draw(self):
+        calls["verify"] += 1
+        return run(self)
+
+    monkeypatch.setattr(Screen, "sensitivities", sensitivities)
+    monkeypatch.setattr(DrawTask, "run", draw)
+    return calls
+
+
+def stop_after(k):
+    """A progress callback that raises :class:`Stop` at its ``k``-th event."""
+    seen = []
+
+    def progress(event: Progress):
+        seen.append(event)
+        if len(seen) == k:
+            raise Stop
+
+    return progress

@@ -36,3 +36,22 @@ def test_design_command_bad_space_exits_2_naming_the_field(tmp_path, capsys):
     argv = ["design", "--fmu", "msd", "--spec", str(spec), "--space", str(space)]
     assert main([*argv, "--out", str(tmp_path / "R.json")]) == 2
     assert "outputs: 'z' is not an FMU output" in capsys.readouterr().err
+
+
+def test_design_command_resumes_from_its_checkpoint(tmp_path):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps(MSD_SPEC))
+    space = tmp_path / "E.json"
+    space.write_text(json.dumps({**MSD_SPACE, "verify_designs": 0, "candidates": 2}))
+    argv = ["design", "--fmu", "msd", "--spec", str(spec), "--space", str(space)]
+    keep = tmp_path / "ck"
+    assert main([*argv, "--out", str(tmp_path / "a.json"), "--checkpoint", str(keep)]) == 0
+    saved = {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in keep.rglob("*.npz")}
+    assert saved
+    assert main([*argv, "--out", str(tmp_path / "b.json"), "--checkpoint", str(keep)]) == 0
+    # nothing evaluated again: every saved evaluation is the same file, untouched
+    assert {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in keep.rglob("*.npz")} == saved
+    a, b = (json.loads((tmp_path / n).read_text()) for n in ("a.json", "b.json"))
+    for doc in (a, b):
+        doc.pop("cost")
+    assert a == b

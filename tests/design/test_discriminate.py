@@ -13,6 +13,7 @@ from fmuid.fit.optimize import fit_problem
 from fmuid.fit.problem import Problem
 from fmuid.model.builtin import builtin_fmu
 from fmuid.plots import discrimination_figure
+from fmuid.report.design import write_discrimination_report
 
 TAU = 0.3
 SPACE = {
@@ -60,6 +61,22 @@ def test_proposal_measures_both_sensors_at_full_amplitude(proposal):
     assert doc["expected_p_value"] < 1e-3
     fig = discrimination_figure(found)
     assert len(fig.axes) == 3
+
+
+def test_discrimination_report_shows_both_predictions_and_the_numbers(proposal, tmp_path):
+    *_, found = proposal
+    page = write_discrimination_report(found, tmp_path / "rep").read_text()
+    assert (tmp_path / "rep" / "discrimination.png").stat().st_size > 10_000
+    assert 'src="discrimination.png"' in page
+    assert "sensor_lag" in page and "input_delay" in page
+    assert f"chi2 = {found.expected_chi2:.4g}" in page
+    for name, value in found.separation.items():
+        assert name in page and f"{value:.4g}" in page
+    assert ">0.005<" in page and ">0.01<" in page  # the space's noise of x and v
+    assert found.to_dict()["noise_sigma"] == {"x": 0.005, "v": 0.01}
+    body = page.split("<body", 1)[1]
+    for raw in ("{", "}", "': ", "array("):  # no Python literal reaches the page
+        assert raw not in body, raw
 
 
 @pytest.mark.slow

@@ -1,9 +1,14 @@
 """Hostile uploads get a 4xx naming the limit, and health answers within 100 ms throughout.
 
-Each attack is posted to a real service while a thread polls ``/v1/health`` every 10 ms, and
-its slowest answer must stay under 100 ms plus twice the slowest answer of the idle service on
-this machine (measured first, over 3 s: on a loaded shared machine the scheduler alone delays a
-request by up to ~0.1 s; an upload parsed in the service held it for 5-30 s): a
+Each attack is posted to a real service while a process polls ``/v1/health`` every 10 ms, and
+the slowest of those answers must stay under 100 ms. The bound is asserted as such when the
+machine is quiet enough for it to mean something: the idle service, measured for 1 s just before
+each attack, answered every poll within 30 ms and the load is under 1 per core (``QUIET_S``,
+``QUIET_LOAD`` in conftest). On a loaded machine (a shared CI runner, where the scheduler alone
+delays an idle service by up to ~0.1 s) the attack may add at most 100 ms to twice the idle
+worst instead; an upload parsed in the service held health for 5-30 s, which fails either
+bound. Both numbers are recorded in the test report (``record_property``), and
+``bench/load.py`` prints health latency under load. The attacks: a
 number cell that makes a backtracking pattern take minutes, a 20k-column header, a spec with 20k
 keys, a spec nested 100k deep, an FMU whose modelDescription lists a million variables (and one
 just over the variable limit), an FMU with a corrupt member, and FMUs whose binary sleeps or
@@ -39,7 +44,6 @@ from input_attacks import (  # noqa: E402
 
 pytestmark = pytest.mark.slow
 
-HEALTH_S = 0.1
 PROBE_TIMEOUT_S = 2
 FORKED_NAME = "fmuidforked"
 LOAD_HOOK = r"""
@@ -55,12 +59,10 @@ __attribute__((constructor)) static void on_load(void) {
 """.replace("@NAME@", FORKED_NAME)
 
 
-@pytest.fixture(scope="module")
-def idle_worst(attacked) -> float:
-    """Slowest health answer of the idle service over 3 s [s]."""
-    with HealthWatch(attacked.url) as watch:
-        time.sleep(3)
-    return watch.worst
+@pytest.fixture
+def health_bound(attacked, health_bound_of):
+    """The bound, from the idle service's slowest health answer over the 1 s before the attack."""
+    return health_bound_of(attacked.url)
 
 
 @pytest.fixture(scope="module")
@@ -76,19 +78,13 @@ def attacked(tmp_path_factory: pytest.TempPathFactory):
     service.stop()
 
 
-def attack(service, idle_worst: float, spec: str, csv: bytes, fmu: Path | None = None) -> str:
+def attack(service, bound, spec: str, csv: bytes, fmu: Path | None = None) -> str:
     """Post under watch; assert a 422 and health within 100 ms; return the reason."""
     with HealthWatch(service.url) as watch:
         response = post_job(service.url, spec, csv, fmu, timeout=120)
     assert response.status_code == 422, response.text
-    assert_health_answered(watch, idle_worst)
+    bound.check(watch)
     return response.json()["detail"]
-
-
-def assert_health_answered(watch: HealthWatch, idle_worst: float) -> None:
-    assert not watch.failures, watch.failures
-    limit = HEALTH_S + 2 * idle_worst
-    assert watch.worst < limit, f"health took {watch.worst:.3f} s (idle: {idle_worst:.3f} s)"
 
 
 SPEC = json.dumps(MSD_SPEC)
@@ -101,26 +97,26 @@ CASES = {
 
 
 @pytest.mark.parametrize(("spec", "csv", "needle"), CASES.values(), ids=CASES.keys())
-def test_hostile_text_is_refused_naming_the_limit(attacked, idle_worst, spec, csv, needle):
-    assert needle in attack(attacked, idle_worst, spec, csv)
+def test_hostile_text_is_refused_naming_the_limit(attacked, health_bound, spec, csv, needle):
+    assert needle in attack(attacked, health_bound, spec, csv)
 
 
-def test_million_variable_model_description(attacked, idle_worst, msd_file, tmp_path):
+def test_million_variable_model_description(attacked, health_bound, msd_file, tmp_path):
     fmu = big_model_description(msd_file, tmp_path / "big.fmu", 1_000_000)
-    reason = attack(attacked, idle_worst, SPEC, GOOD_CSV, fmu)
+    reason = attack(attacked, health_bound, SPEC, GOOD_CSV, fmu)
     assert reason.startswith("big.fmu: modelDescription.xml unpacks to")
     assert "(FMUID_MAX_MODEL_DESCRIPTION_BYTES)" in reason
 
 
-def test_variables_over_the_limit(attacked, idle_worst, msd_file, tmp_path):
+def test_variables_over_the_limit(attacked, health_bound, msd_file, tmp_path):
     fmu = big_model_description(msd_file, tmp_path / "many.fmu", 1_000)
-    reason = attack(attacked, idle_worst, SPEC, GOOD_CSV, fmu)
+    reason = attack(attacked, health_bound, SPEC, GOOD_CSV, fmu)
     assert "more than the limit of 1000 variables (FMUID_MAX_MODEL_VARIABLES)" in reason
 
 
-def test_corrupt_member(attacked, idle_worst, msd_file, tmp_path):
+def test_corrupt_member(attacked, health_bound, msd_file, tmp_path):
     fmu = corrupt_member(msd_file, tmp_path / "bad.fmu")
-    reason = attack(attacked, idle_worst, SPEC, GOOD_CSV, fmu)
+    reason = attack(attacked, health_bound, SPEC, GOOD_CSV, fmu)
     assert reason.startswith("bad.fmu: ") and "corrupt" in reason
 
 
@@ -145,12 +141,12 @@ def forked_sleepers() -> list[str]:
     return found
 
 
-def test_sleeping_binaries_do_not_stall_the_service(attacked, idle_worst, msd_file, tmp_path):
+def test_sleeping_binaries_do_not_stall_the_service(attacked, health_bound, msd_file, tmp_path):
     fmu = hooked_fmu(msd_file, tmp_path / "sleeper.fmu", fork=False)
     with HealthWatch(attacked.url) as watch, ThreadPoolExecutor(4) as pool:
         responses = list(pool.map(lambda _: post_job(attacked.url, SPEC, GOOD_CSV, fmu), range(4)))
         polls = [attacked.client().list() for _ in range(3)]
-    assert_health_answered(watch, idle_worst)
+    health_bound.check(watch)
     assert all(poll == [] for poll in polls)
     for response in responses:
         assert response.status_code == 422, response.text
@@ -158,9 +154,9 @@ def test_sleeping_binaries_do_not_stall_the_service(attacked, idle_worst, msd_fi
         assert f"did not finish within {PROBE_TIMEOUT_S} s (FMUID_PROBE_TIMEOUT_S)" in detail
 
 
-def test_forking_binary_leaves_no_process(attacked, idle_worst, msd_file, tmp_path):
+def test_forking_binary_leaves_no_process(attacked, health_bound, msd_file, tmp_path):
     fmu = hooked_fmu(msd_file, tmp_path / "forker.fmu", fork=True)
-    reason = attack(attacked, idle_worst, SPEC, GOOD_CSV, fmu)
+    reason = attack(attacked, health_bound, SPEC, GOOD_CSV, fmu)
     assert "does not export fmi2GetVersion" in reason
     deadline = time.monotonic() + 5
     while forked_sleepers() and time.monotonic() < deadline:

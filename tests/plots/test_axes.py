@@ -106,12 +106,16 @@ def test_compilation_and_profiles_into_given_axes(profile_result: ProfileResult)
 def test_discrimination_into_given_axes():
     trial = Trial("step", {"time": 1.0, "amplitude": 1.0}, 4.0, 10.0, ("x", "v"))
     preds = {h: {"x": np.sin(T) * s, "v": np.cos(T) * s} for h, s in (("lag", 1.0), ("delay", 0.9))}
-    found = Discrimination(trial, ("lag", "delay"), {"B": 30.0, "A": 25.0}, T, preds, "f", 12)
+    found = Discrimination(
+        trial, ("lag", "delay"), {"B": 30.0, "A": 25.0}, T, preds, "f", 12, sigma={"x": 0.1}
+    )
     fig = Figure()
     axes = fig.subplots(3, 1)
     assert discrimination_figure(found, ax=axes) is fig
     assert _gids(axes[0]) == ["input"] and axes[0].get_ylabel() == "f"
     assert _gids(axes[2]) == ["prediction_lag", "prediction_delay"]
+    assert [c.get_gid() for c in axes[1].collections] == ["noise_band"]  # x has a sigma
+    assert not axes[2].collections
     with pytest.raises(ValueError, match=r"exactly 3 Axes .*the input and 2 outputs.*got 2"):
         discrimination_figure(found, ax=axes[1:])
 

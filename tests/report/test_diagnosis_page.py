@@ -70,7 +70,7 @@ def _proposal():
     found = Discrimination(
         trial, ("sensor_lag", "input_delay"),
         {"input_delay fitted to sensor_lag": 41.5, "sensor_lag fitted to input_delay": 38.25},
-        time, {"sensor_lag": lag, "input_delay": delay}, "f", 24,
+        time, {"sensor_lag": lag, "input_delay": delay}, "f", 24, {"x": 0.005, "v": 0.01},
     )  # fmt: skip
     return found
 
@@ -97,7 +97,8 @@ def test_the_settling_test_gets_its_table_and_figure(tmp_path):
 
     text = html.unescape(write_report(_Named(), tmp_path).read_text())
     body = re.sub(r"<[^>]+>", " ", text.split("<body>")[1])
-    assert "A test that would settle the tie" in body
-    assert re.search(r"step of f \(amplitude 1, time 1\)", body)
-    assert re.search(r"chi2 of sensor_lag fitted to input_delay\s+38\.25", body)
-    assert (tmp_path / "diagnose_settling_test.png").stat().st_size > 1000
+    assert "The test that tells sensor_lag from input_delay" in body
+    assert "step (amplitude 1, time 1), 6 s at 10 Hz, driving f, measuring x, v" in body
+    assert re.search(r"sensor_lag fitted to input_delay\s+38\.25", body)
+    assert re.search(r"x\s+0\.005", body)
+    assert (tmp_path / "discrimination.png").stat().st_size > 1000

@@ -11,6 +11,7 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 
 from fmuid.api.auth import BearerAuth
+from fmuid.api.drawing import ReportDrawer
 from fmuid.api.failures import add_failure_handlers
 from fmuid.api.limits import BodyLimit
 from fmuid.api.openapi import answer_options, document_errors, serve_docs, validation_error
@@ -78,6 +79,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         settings.database, settings.data_dir, settings.min_free_bytes, settings.disk_quota_bytes
     )
     app.state.vetting = vetting
+    app.state.drawer = ReportDrawer(settings, supervisor.warm)
     for router in (health.router, jobs.router, reports.router):
         answer_options(router)
         app.include_router(router)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from fastapi import HTTPException, Request
 
+from fmuid.api.drawing import ReportDrawer
 from fmuid.api.vetting import VettingPool
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import Job, JobStore
@@ -33,6 +34,12 @@ def get_supervisor(request: Request) -> Supervisor:
     """Return the supervisor running the jobs."""
     supervisor: Supervisor = request.app.state.supervisor
     return supervisor
+
+
+def get_drawer(request: Request) -> ReportDrawer:
+    """Return what draws reports on their first request."""
+    drawer: ReportDrawer = request.app.state.drawer
+    return drawer
 
 
 def get_store_health(request: Request) -> StoreHealth:

@@ -116,6 +116,10 @@ class Discrimination:
         The FMU input driven.
     screened
         Tests scored.
+    sigma
+        Noise standard deviation of each sensor of the test (the space's), in the output's unit.
+    confirmed
+        Whether ``separation`` comes from full fits (else from the linearised screen).
 
     """
 
@@ -126,6 +130,8 @@ class Discrimination:
     predictions: dict[str, dict[str, np.ndarray]]
     input_name: str
     screened: int
+    sigma: dict[str, float] = field(default_factory=dict)
+    confirmed: bool = True
 
     @property
     def expected_chi2(self) -> float:
@@ -145,6 +151,8 @@ class Discrimination:
             "expected_chi2": round(lam, 4),
             "expected_p_value": float(chi2_dist.sf(lam, 1)),
             "screened": self.screened,
+            "noise_sigma": dict(self.sigma),
+            "confirmed": self.confirmed,
             "time": _digits(self.time),
             "predictions": {
                 h: {o: _digits(y) for o, y in ys.items()} for h, ys in self.predictions.items()
@@ -171,6 +179,8 @@ def discrimination_from_dict(doc: Mapping[str, Any]) -> Discrimination:
         },
         input_name=str(experiment["input_variable"]),
         screened=int(doc["screened"]),
+        sigma={str(o): float(v) for o, v in (doc.get("noise_sigma") or {}).items()},
+        confirmed=bool(doc.get("confirmed", True)),
     )
 
 
@@ -216,6 +226,7 @@ def discriminating_experiment(
     b: Hypothesis,
     *,
     progress: ProgressCallback | None = None,
+    confirm_from: float = 0.0,
 ) -> Discrimination:
     """Propose the feasible test that maximises the expected chi2 separation of A and B.
 
@@ -232,6 +243,11 @@ def discriminating_experiment(
         The two hypotheses.
     progress
         Receives ``Progress("discriminate", done, total, detail)``.
+    confirm_from
+        The best screened tests are confirmed by full fits only when the largest linearised
+        separation reaches this; below it the best screened test is returned with its
+        linearised separation (``confirmed`` false), e.g. when a caller only needs to know
+        whether any test reaches a significance level far above it.
 
     Returns
     -------
@@ -251,16 +267,24 @@ def discriminating_experiment(
         if progress:
             progress(Progress("discriminate", k + 1, len(trials), "linearised screen"))
     scored.sort(reverse=True)
-    best: tuple[float, Trial, dict[str, float], dict[str, dict[str, np.ndarray]]] | None = None
-    for _, k in scored[:CONFIRM]:
-        sep, pred = _separation(path, spec, space, trials[k], a, b, full=True)
-        if best is None or min(sep.values()) > best[0]:
-            best = (min(sep.values()), trials[k], sep, pred)
-    assert best is not None
-    _, trial, sep, pred = best
+    if scored[0][0] < confirm_from:
+        trial = trials[scored[0][1]]
+        sep, pred = _separation(path, spec, space, trial, a, b, full=False)
+        confirmed = False
+    else:
+        best: tuple[float, Trial, dict[str, float], dict[str, dict[str, np.ndarray]]] | None = None
+        for _, k in scored[:CONFIRM]:
+            sep, pred = _separation(path, spec, space, trials[k], a, b, full=True)
+            if best is None or min(sep.values()) > best[0]:
+                best = (min(sep.values()), trials[k], sep, pred)
+        assert best is not None
+        _, trial, sep, pred = best
+        confirmed = True
+    sigma = {o: space.outputs[o].sigma for o in trial.outputs}
     return Discrimination(
-        trial, (a.name, b.name), sep, output_times(trial), pred, space.input, len(trials)
-    )
+        trial, (a.name, b.name), sep, output_times(trial), pred, space.input, len(trials), sigma,
+        confirmed,
+    )  # fmt: skip
 
 
 def default_space(problem: Problem) -> Space:

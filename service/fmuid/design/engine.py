@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -13,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from fmuid.data import Spec
+from fmuid.design.checkpoint import Checkpoint, Codec, evaluate_resumably
 from fmuid.design.fisher import (
     Sensitivity,
     criterion,
@@ -27,7 +29,7 @@ from fmuid.design.fisher import (
 from fmuid.design.result import DesignResult, RankedDesign
 from fmuid.design.signals import Trial, sample_trials
 from fmuid.design.space import Space, check_design
-from fmuid.design.verify import verify
+from fmuid.design.verify import Draw, DrawTask, combine
 from fmuid.fit.result import Cost
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel
@@ -88,6 +90,7 @@ def design(
     workers: int | None = 1,
     executor: Any = None,
     progress: ProgressCallback | None = None,
+    checkpoint: Path | None = None,
 ) -> DesignResult:
     """Propose the experiment that identifies every free parameter most narrowly per test time.
 
@@ -103,9 +106,15 @@ def design(
     verify_designs
         Best designs verified by profiles (default ``space.verify_designs``).
     workers, executor
-        Profile workers of the verification (local processes or a dask client).
+        Local worker processes (``None``: the CPU count) or a dask client. One task is one
+        trial of the screen (its sensitivities at every prior point: ``2 n (points + 1)``
+        simulations, far more than a task's overhead) or one verified design on one noise draw
+        (a fit and every profile). The numbers do not depend on where the tasks run.
     progress
-        Receives ``Progress("design", done, total, detail)``.
+        Receives ``Progress("design", done, total, detail)`` after every finished evaluation.
+    checkpoint
+        A folder that keeps every finished evaluation (:mod:`fmuid.design.checkpoint`): run
+        again with the same inputs, the study evaluates only what is not there.
 
     Returns
     -------
@@ -120,18 +129,22 @@ def design(
     t0 = time.perf_counter()
     model = FmuModel(resolve_fmu(fmu))
     check_design(space, spec, model)
+    n_verify = space.verify_designs if verify_designs is None else verify_designs
+    store = Checkpoint.for_study(checkpoint, model, spec, space, n_verify) if checkpoint else None
     rng = np.random.default_rng(space.seed)
     trials = sample_trials(space, rng)
     threshold = thresholds(spec.confidence, len(spec.parameters))["simultaneous"]
     template = trial_problem(model, spec, space, trials[0])
     points = robust_points(spec, space, template, rng)
-    sims0 = 0
     base = Screen(model, spec, space, points, np.eye(len(spec.parameters)), set(), [], threshold)
-    sens_all = []
-    for k, trial in enumerate(trials):
-        sens_all.append(base.sensitivities(trial))
-        if progress:
-            progress(Progress("design", k + 1, len(trials), "Fisher screen"))
+    run = functools.partial(
+        evaluate_resumably, checkpoint=store, model=model, interface=spec.interface,
+        workers=workers, executor=executor,
+    )  # fmt: skip
+    sens_all = run(
+        base.sensitivities, trials, [f"screen-{k}" for k in range(len(trials))], SENSITIVITIES,
+        on_done=_reporter(progress, "Fisher screen"),
+    )  # fmt: skip
     sims0 = len(trials) * len(points) * (2 * len(spec.parameters))
     check = null_space([s[0] for s in sens_all], template, points[0])
     combos = check["non_identifiable_combinations"]
@@ -150,20 +163,18 @@ def design(
         trial = trials[k].with_(outputs=tuple(outputs))
         ranked.append(RankedDesign(trial, score, screen.predicted(sens_all[k][0], trial, outputs)))
     t_screen = time.perf_counter() - t0
-    n_verify = space.verify_designs if verify_designs is None else verify_designs
+    pairs = [(i, draw) for i in range(min(n_verify, len(ranked))) for draw in range(space.draws)]
+    tasks = [
+        DrawTask(model, spec, space, ranked[i].trial, space.seed + 1000 * (i + 1), draw)
+        for i, draw in pairs
+    ]
+    draws = run(
+        DrawTask.run, tasks, [f"verify-{i}-{draw}" for i, draw in pairs], DRAW,
+        on_done=_reporter(progress, "profiles of the best designs"),
+    )  # fmt: skip
     verified = []
     for i, d in enumerate(ranked[:n_verify]):
-        if progress:
-            progress(Progress("design", i, n_verify, f"profiles of design {i + 1}"))
-        v = verify(
-            model,
-            spec,
-            space,
-            d.trial,
-            seed=space.seed + 1000 * (i + 1),
-            workers=workers,
-            executor=executor,
-        )
+        v = combine(list(spec.parameters), draws[i * space.draws : (i + 1) * space.draws])
         sims0 += v.simulations
         verified.append(RankedDesign(d.trial, d.score, d.predicted, v))
     verified.sort(key=lambda d: _verified_key(d, space))
@@ -184,6 +195,29 @@ def design(
         cost=Cost(sims0, seconds),
         stage_seconds={"screen_seconds": t_screen, "verify_seconds": seconds - t_screen},
     )
+
+
+def _reporter(progress: ProgressCallback | None, detail: str) -> Callable[[int, int], None]:
+    def report(done: int, total: int) -> None:
+        if progress:
+            progress(Progress("design", done, total, detail))
+
+    return report
+
+
+SENSITIVITIES: Codec[list[Sensitivity]] = Codec(
+    lambda sens: {
+        "jacobians": np.stack([s.jacobian for s in sens]),
+        "outputs": np.array(sens[0].outputs),
+        "rows": np.array(sens[0].rows),
+    },
+    lambda a: [
+        Sensitivity(j, tuple(str(o) for o in a["outputs"]), int(a["rows"])) for j in a["jacobians"]
+    ],
+)
+"""Checkpoint form of a screen evaluation: a trial's sensitivities at every prior point."""
+DRAW: Codec[Draw] = Codec(Draw.to_arrays, Draw.from_arrays)
+"""Checkpoint form of a verification evaluation."""
 
 
 def _verified_key(d: RankedDesign, space: Space) -> tuple[float, float]:

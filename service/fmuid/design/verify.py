@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +11,7 @@ from fmuid.data import Spec
 from fmuid.design.fisher import trial_problem
 from fmuid.design.signals import Trial
 from fmuid.design.space import Space
+from fmuid.design.tasks import run_evaluations
 from fmuid.fit.optimize import fit_problem
 from fmuid.fit.problem import Problem
 from fmuid.model.fmu import FmuModel
@@ -83,6 +84,96 @@ def noisy_problem(
     return trial_problem(model, spec, space, trial, values)
 
 
+@dataclass(frozen=True)
+class Draw:
+    """Profiles of one design on one noise draw (one task of the verification).
+
+    Attributes
+    ----------
+    identifiable, open_ended
+        Per free parameter (spec order): labelled identifiable; a simultaneous CI end open.
+    widths
+        Per free parameter: simultaneous CI width (as :class:`Verification` counts it).
+    simulations, seconds
+        Cost of the fit and the profiles.
+
+    """
+
+    identifiable: tuple[bool, ...]
+    open_ended: tuple[bool, ...]
+    widths: tuple[float, ...]
+    simulations: int
+    seconds: float
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """Return the checkpoint form (exact)."""
+        return {
+            "identifiable": np.array(self.identifiable, dtype=bool),
+            "open_ended": np.array(self.open_ended, dtype=bool),
+            "widths": np.array(self.widths, dtype=float),
+            "cost": np.array([self.simulations, self.seconds]),
+        }
+
+    @classmethod
+    def from_arrays(cls, arrays: Mapping[str, np.ndarray]) -> Draw:
+        """Return the draw a checkpoint holds."""
+        return cls(
+            tuple(bool(v) for v in arrays["identifiable"]),
+            tuple(bool(v) for v in arrays["open_ended"]),
+            tuple(float(v) for v in arrays["widths"]),
+            int(arrays["cost"][0]),
+            float(arrays["cost"][1]),
+        )
+
+
+@dataclass(frozen=True)
+class DrawTask:
+    """One verification evaluation: profile ``trial`` on noise draw ``draw`` of ``seed``."""
+
+    model: FmuModel
+    spec: Spec
+    space: Space
+    trial: Trial
+    seed: int
+    draw: int
+
+    def run(self) -> Draw:
+        """Simulate the draw at the spec's start values, fit it from the truth, profile it.
+
+        The fit takes no global search (as the thesis study did); the profiles run in this
+        process with the engine of ``fmuid profile``.
+        """
+        truth = {n: float(p.start) for n, p in self.spec.parameters.items()}
+        rng = np.random.default_rng((self.seed, self.draw))
+        problem = noisy_problem(self.model, self.spec, self.space, self.trial, truth, rng)
+        fit = fit_problem(problem, start=truth, global_search=False)
+        prof = profile_problem(problem, fit, workers=1)
+        ident, opened, widths = [], [], []
+        for i, name in enumerate(problem.names):
+            p = prof.parameters[name]
+            ident.append(p.status == "identifiable")
+            opened.append(None in p.ci_simultaneous)
+            lo = p.ci_simultaneous[0] if p.ci_simultaneous[0] is not None else problem.lower[i]
+            hi = p.ci_simultaneous[1] if p.ci_simultaneous[1] is not None else problem.upper[i]
+            log_scaled = problem.scales[i] == "log"
+            widths.append(float(np.log10(hi) - np.log10(lo)) if log_scaled else float(hi - lo))
+        return Draw(
+            tuple(ident), tuple(opened), tuple(widths), prof.cost.simulations, prof.cost.seconds
+        )
+
+
+def combine(names: Sequence[str], draws: Sequence[Draw]) -> Verification:
+    """Return the verification of a design from its draws."""
+    return Verification(
+        len(draws),
+        {n: sum(d.identifiable[i] for d in draws) for i, n in enumerate(names)},
+        {n: sum(d.open_ended[i] for d in draws) for i, n in enumerate(names)},
+        {n: [d.widths[i] for d in draws] for i, n in enumerate(names)},
+        sum(d.simulations for d in draws),
+        sum(d.seconds for d in draws),
+    )
+
+
 def verify(
     model: FmuModel,
     spec: Spec,
@@ -93,31 +184,12 @@ def verify(
     workers: int | None = 1,
     executor: object = None,
 ) -> Verification:
-    """Profile the design on ``space.draws`` noisy datasets simulated at the spec's start values.
+    """Profile the design on ``space.draws`` noisy datasets (one :class:`DrawTask` each).
 
-    Each draw is fitted from the truth (no global search, as the thesis study did) and every
-    free parameter is profiled with the same engine as ``fmuid profile``.
+    ``workers`` local processes or the dask ``executor`` take one draw each.
     """
-    truth = {n: float(p.start) for n, p in spec.parameters.items()}
-    identifiable = dict.fromkeys(spec.parameters, 0)
-    widths: dict[str, list[float]] = {n: [] for n in spec.parameters}
-    opened = dict.fromkeys(spec.parameters, 0)
-    sims, seconds = 0, 0.0
-    for draw in range(space.draws):
-        rng = np.random.default_rng((seed, draw))
-        problem = noisy_problem(model, spec, space, trial, truth, rng)
-        fit = fit_problem(problem, start=truth, global_search=False)
-        prof = profile_problem(problem, fit, workers=workers, executor=executor)
-        sims += prof.cost.simulations
-        seconds += prof.cost.seconds
-        for i, name in enumerate(problem.names):
-            p = prof.parameters[name]
-            identifiable[name] += p.status == "identifiable"
-            lo = p.ci_simultaneous[0] if p.ci_simultaneous[0] is not None else problem.lower[i]
-            hi = p.ci_simultaneous[1] if p.ci_simultaneous[1] is not None else problem.upper[i]
-            opened[name] += None in p.ci_simultaneous
-            if problem.scales[i] == "log":
-                widths[name].append(float(np.log10(hi) - np.log10(lo)))
-            else:
-                widths[name].append(float(hi - lo))
-    return Verification(space.draws, identifiable, opened, widths, sims, seconds)
+    tasks = [DrawTask(model, spec, space, trial, seed, d) for d in range(space.draws)]
+    draws = run_evaluations(
+        DrawTask.run, tasks, model, spec.interface, workers=workers, executor=executor
+    )
+    return combine(list(spec.parameters), draws)

@@ -83,7 +83,7 @@ def settle(tests: Sequence[Discrimination]) -> str:
             out += (
                 f" No step, chirp or multisine like this data's (its input amplitude, length, "
                 f"rate and outputs) tells {a} from {b}: the largest expected chi2 separation "
-                f"is {lam:.3g}."
+                f"is {lam:.3g}{'' if found.confirmed else ' (linearised)'}."
             )
     return out
 

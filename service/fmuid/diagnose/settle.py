@@ -31,7 +31,12 @@ p-value below this level."""
 MAX_TIES = 2
 """Ties searched (the strongest first); each search is a screen plus a few full fits."""
 
-CANDIDATES = 4
+CONFIRM_BELOW = 4.0
+"""The screen's best tests are confirmed by full fits only when the linearised separation is
+at least the settling level's chi2 (10.8) over this factor: a linearised estimate four times
+too small to settle the tie does not pay for the full fits."""
+
+CANDIDATES = 2
 """Tests sampled per input family (step, chirp, multisine) for each tie: the screen's cost
 (about 2 (n + 2) simulations per test) stays a fraction of the diagnosis."""
 
@@ -71,8 +76,11 @@ def settling_tests(
     """
     space = default_space(problem).model_copy(update={"candidates": CANDIDATES})
     a = hypothesis(named)
+    floor = float(stats.chi2.isf(SETTLES, 1)) / CONFIRM_BELOW
     return [
-        discriminating_experiment(problem.fmu_path, problem.spec, space, a, hypothesis(t.fit))
+        discriminating_experiment(
+            problem.fmu_path, problem.spec, space, a, hypothesis(t.fit), confirm_from=floor
+        )
         for t in ties[:MAX_TIES]
     ]
 

@@ -1,8 +1,9 @@
 """Keeping the data folder bounded: the service lease, job removal, retention, disk room.
 
-Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``),
-``logs/<id>.log`` and :func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and
-work folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
+Files of a job besides its rows: ``reports/<id>/`` (and ``<id>.error``, ``<id>.tmp``,
+``<id>.pickle``), ``logs/<id>.log``, ``checkpoints/<id>/`` (a design's finished evaluations)
+and :func:`job_tmp_dir` (the job processes' ``TMPDIR``: extracted FMU copies and work
+folders). Blobs (uploads by content hash) are shared between jobs and removed when no job
 refers to them any more.
 """
 
@@ -40,7 +41,18 @@ def job_files(data_dir: Path, job_id: str) -> list[Path]:
         reports / f"{job_id}.tmp",
         data_dir / "logs" / f"{job_id}.log",
         job_tmp_dir(data_dir, job_id),
+        checkpoint_dir(data_dir, job_id),
+        reports / f"{job_id}.pickle",
     ]
+
+
+def checkpoint_dir(data_dir: Path, job_id: str) -> Path:
+    """Return the folder of a job's finished evaluations, kept across restarts of the service.
+
+    The job process removes it once the job has an outcome; :func:`remove_orphans` sweeps the
+    folders of jobs that are gone or finished (a job killed at its time limit).
+    """
+    return data_dir / "checkpoints" / job_id
 
 
 def job_tmp_root(data_dir: Path) -> Path:
@@ -175,16 +187,22 @@ def remove_unused_blobs(store: JobStore, data_dir: Path) -> None:
 def remove_orphans(store: JobStore, data_dir: Path, alive: set[str]) -> None:
     """Remove job files whose job is gone, and work folders of jobs without a live process.
 
-    ``alive`` holds the jobs whose process runs (a done job's process may still draw its report).
+    ``alive`` holds the jobs whose process runs; the work folder ``<id>.report`` of a report
+    being drawn (its marker ``reports/<id>.tmp`` exists) is kept too.
     """
     ids = {row[0]: row[1] for row in store.connection().execute("SELECT id, status FROM jobs")}
     for folder in (data_dir / "reports", data_dir / "logs"):
         for path in folder.glob("*") if folder.is_dir() else []:
             if path.name.split(".")[0] not in ids:
                 remove_paths([path])
+    checkpoints = data_dir / "checkpoints"
+    for path in checkpoints.iterdir() if checkpoints.is_dir() else []:
+        if ids.get(path.name) not in ("queued", "running"):
+            remove_paths([path])
     tmp_root = job_tmp_root(data_dir)
     for path in tmp_root.iterdir() if tmp_root.is_dir() else []:
-        if path.name not in alive:
+        job_id = path.name.split(".")[0]
+        if path.name not in alive and not (data_dir / "reports" / f"{job_id}.tmp").is_dir():
             remove_paths([path])
 
 

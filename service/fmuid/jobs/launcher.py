@@ -11,23 +11,31 @@ them carries the store's tag (:data:`fmuid.jobs.proc.JOB_DB_ENV`) in its environ
 
 from __future__ import annotations
 
+import contextlib
 import faulthandler
+import logging
 import multiprocessing
+import multiprocessing.connection
+import multiprocessing.forkserver as forkserver
 import os
 import subprocess
 import sys
 import tempfile
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from fmuid.jobs.proc import JOB_DB_ENV, job_command, job_environment
+from fmuid.jobs.proc import JOB_DB_ENV, JOB_NICENESS, is_alive, job_command, job_environment
 from fmuid.profile.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
+
+logger = logging.getLogger(__name__)
 
 PRELOAD = [
     "fmuid.profile.forkserver_guard",
     "fmuid.jobs.launcher",
     "fmuid.jobs.run",
+    "fmuid.jobs.draw",
     "fmuid.stages",
     "fmuid.diagnose",
     "fmuid.report",
@@ -56,6 +64,9 @@ class JobProcess(Protocol):
 
     def wait(self) -> int:
         """Wait for the end; return the exit status (negative: the signal that ended it)."""
+
+    def wait_end(self) -> None:
+        """Block until the process has ended, without collecting its status."""
 
 
 class ColdProcess:
@@ -89,13 +100,19 @@ class ColdProcess:
         """Reap the child; return its exit status."""
         return self.process.wait()
 
+    def wait_end(self) -> None:
+        """Block until the child has ended, leaving it to :meth:`wait` to reap."""
+        with contextlib.suppress(ChildProcessError):
+            os.waitid(os.P_PID, self.pid, os.WEXITED | os.WNOWAIT)
+
 
 class WarmProcess:
-    """A job process forked by the warm server (see :class:`WarmServer`)."""
+    """A process forked by the warm server (see :class:`WarmServer`)."""
 
-    def __init__(self, process: Any):
+    def __init__(self, process: Any, server_pid: int | None):
         self.process = process
         self.pid: int = process.pid
+        self.server_pid = server_pid
 
     def exited(self) -> bool:
         """Whether the process has ended (the server reaps it and reports its status)."""
@@ -107,34 +124,94 @@ class WarmProcess:
         code: int = self.process.exitcode
         return code
 
+    def wait_end(self) -> None:
+        """Block until the process has ended (or its server died)."""
+        multiprocessing.connection.wait([self.process.sentinel])
+
+    def server_died(self) -> bool:
+        """Whether the server that forked this process has died (which killed the process)."""
+        return self.server_pid is not None and not is_alive(self.server_pid)
+
 
 class WarmServer:
-    """The forkserver of job processes, started on first use by the supervisor's thread.
+    """The forkserver of job and drawing processes, started on first use.
+
+    It is replaced by a new one once it has forked ``recycle_after`` processes and every one
+    of them has ended (its processes die with it), so that memory an engine import or a job
+    left in it does not pile up; until then :meth:`due` tells the caller to start jobs cold.
+    A server that crashed is replaced on the next fork; a fork that fails because the server
+    died during it is tried once more on a new server.
 
     Parameters
     ----------
     db_path
-        The job store: the server and its job processes carry it as their tag.
+        The job store: the server and its processes carry it as their tag.
+    recycle_after
+        Processes one server forks before it is replaced.
 
     """
 
-    def __init__(self, db_path: Path):
+    def __init__(self, db_path: Path, recycle_after: int):
         self.db_path = db_path
+        self.recycle_after = recycle_after
         self._ctx = multiprocessing.get_context("forkserver")
+        self._lock = threading.Lock()
+        self._forked = 0
+        self._live: list[WarmProcess] = []
+
+    def due(self) -> bool:
+        """Whether the server has forked its share and waits for its processes to end."""
+        with self._lock:
+            self._live = [p for p in self._live if not p.exited()]
+            return self._forked >= self.recycle_after and bool(self._live)
 
     def start(self, launch: Launch) -> WarmProcess:
         """Fork a job process for ``launch`` and return it."""
-        os.environ[JOB_DB_ENV] = str(self.db_path)  # inherited by the server when it starts
-        os.environ[POOL_PARENT_ENV] = str(os.getpid())
-        os.environ["PYTHONFAULTHANDLER"] = "1"
-        self._ctx.set_forkserver_preload(PRELOAD)
-        process = self._ctx.Process(
-            target=forked_job,
-            args=(launch, os.getpid()),
-            name=f"fmuid-job-{launch.job_id}",
-        )
+        return self.fork(forked_job, (launch, os.getpid()), f"fmuid-job-{launch.job_id}")
+
+    def fork(self, target: Any, args: tuple[Any, ...], name: str) -> WarmProcess:
+        """Fork a process that runs ``target(*args)`` (picklable) and return it."""
+        with self._lock:
+            self._live = [p for p in self._live if not p.exited()]
+            if self._forked >= self.recycle_after and not self._live:
+                logger.info("warm server replaced after %d processes", self._forked)
+                _stop_server()
+            if _server_pid() is None or not is_alive(_server_pid() or 0):
+                self._forked = 0
+            os.environ[JOB_DB_ENV] = str(self.db_path)  # inherited by the server when it starts
+            os.environ[POOL_PARENT_ENV] = str(os.getpid())
+            os.environ["PYTHONFAULTHANDLER"] = "1"
+            self._ctx.set_forkserver_preload(PRELOAD)
+            try:
+                process = self._start(target, args, name)
+            except (OSError, EOFError) as exc:  # the server died while forking
+                logger.warning("warm server failed to fork (%s); starting a new one", exc)
+                _stop_server()
+                self._forked = 0
+                process = self._start(target, args, name)
+            self._forked += 1
+            warm = WarmProcess(process, _server_pid())
+            self._live.append(warm)
+            return warm
+
+    def _start(self, target: Any, args: tuple[Any, ...], name: str) -> Any:
+        process = self._ctx.Process(target=target, args=args, name=name)
         process.start()
-        return WarmProcess(process)
+        return process
+
+
+def _server_pid() -> int | None:
+    pid: int | None = forkserver._forkserver._forkserver_pid  # type: ignore[attr-defined]
+    return pid
+
+
+def _stop_server() -> None:
+    """Stop the forkserver (dead or alive) so that the next fork starts a new one."""
+    try:
+        forkserver._forkserver._stop()  # type: ignore[attr-defined]
+    except (OSError, TypeError):  # it died: its socket or alive pipe is gone already
+        server: Any = forkserver._forkserver  # type: ignore[attr-defined]
+        server._forkserver_pid = server._forkserver_alive_fd = server._forkserver_address = None
 
 
 def forked_job(launch: Launch, service_pid: int) -> None:
@@ -145,6 +222,7 @@ def forked_job(launch: Launch, service_pid: int) -> None:
     """
     os.setsid()
     die_with_pool_owner(service_pid)
+    os.nice(JOB_NICENESS)
     log = os.open(launch.log_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
     os.dup2(log, 1)
     os.dup2(log, 2)

@@ -19,13 +19,18 @@ import signal
 import time
 from pathlib import Path
 
+JOB_NICENESS = 5
+"""Job and report drawing processes run at this lower priority, so that on a machine whose cores
+they fill the service still answers health and polls at once (checking processes run lower
+still, :data:`fmuid.jobs.vet.NICENESS`)."""
 JOB_DB_ENV = "FMUID_JOB_DB"
 JOB_ID_ENV = "FMUID_JOB_ID"
 PARENT_ENV = "FMUID_JOB_PARENT"
 
-BOOTSTRAP = """\
+BOOTSTRAP = f"""\
 import ctypes, os, signal, sys
 ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
+os.nice({JOB_NICENESS})
 if os.getppid() != int(os.environ["FMUID_JOB_PARENT"]):
     sys.exit("fmuid.jobs.run: the service that started this job is gone")
 import runpy
@@ -34,7 +39,8 @@ runpy.run_module("fmuid.jobs.run", run_name="__main__", alter_sys=True)
 """
 """``python -c`` program of a job process: die with the parent, then run :mod:`fmuid.jobs.run`.
 
-``1`` is ``PR_SET_PDEATHSIG``. The module name stays in the command line, so ``pgrep -f
+``1`` is ``PR_SET_PDEATHSIG``; the priority is lowered (:data:`JOB_NICENESS`) before the
+imports. The module name stays in the command line, so ``pgrep -f
 fmuid.jobs.run`` finds job processes.
 """
 
@@ -108,14 +114,15 @@ def end_processes(pids: list[int], timeout: float = 10.0) -> list[int]:
     deadline = time.monotonic() + timeout
     left = pids
     while left:
-        left = [pid for pid in left if _alive(pid)]
+        left = [pid for pid in left if is_alive(pid)]
         if not left or time.monotonic() > deadline:
             break
         time.sleep(0.05)
     return left
 
 
-def _alive(pid: int) -> bool:
+def is_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists and is not a zombie."""
     try:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:

@@ -6,8 +6,8 @@ hang or runaway memory of the FMU hits only this process (and the pool workers t
 from it), which the supervisor can kill as a group. This process limits its own address space,
 enforces its own time limit (it records the failure and kills its group), loads the job's inputs
 from the store, runs the engine, reports progress at most every :data:`PROGRESS_INTERVAL_S` and
-stores the result (or the reason it failed); then, in a step of its own that cannot fail the job,
-it draws the HTML report.
+stores the result (or the reason it failed). The HTML report is drawn later, on its first
+request (:mod:`fmuid.jobs.draw`).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ import threading
 import time
 import traceback
 import zipfile
+from collections.abc import Iterator
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack
 from pathlib import Path
@@ -35,6 +36,8 @@ from typing import Any
 
 from fmuid.errors import FmuidError
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
+from fmuid.jobs.draw import keep_result
+from fmuid.jobs.housekeeping import checkpoint_dir
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -131,10 +134,12 @@ def run_engine(
     spec: Any,
     progress: ProgressWriter,
     dask_scheduler: str | None,
+    checkpoint: Path | None = None,
 ) -> Any:
     """Call ``fmuid.fit``, ``profile``, ``diagnose`` or ``design`` and return its result.
 
-    For ``design``, ``experiments`` holds the experiment space instead of datasets.
+    For ``design``, ``experiments`` holds the experiment space instead of datasets, and
+    ``checkpoint`` the folder that keeps its finished evaluations across restarts.
     """
     import fmuid
 
@@ -153,43 +158,26 @@ def run_engine(
                         f"cannot reach the dask scheduler at {dask_scheduler}: {exc}"
                     ) from exc
             if kind == "design":
-                return fmuid.design(fmu, spec, experiments[0], progress=progress, executor=executor)
+                return fmuid.design(
+                    fmu, spec, experiments[0], progress=progress, executor=executor,
+                    checkpoint=checkpoint,
+                )  # fmt: skip
             return fmuid.profile(fmu, experiments, spec, progress=progress, executor=executor)
     return fmuid.diagnose(fmu, experiments, spec, progress=progress)
 
 
-def write_report(
-    result: Any, directory: Path, fmu: Path, experiments: list[Any], spec: Any
-) -> None:
-    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not).
-
-    It is drawn in ``<directory>.tmp`` (made before the result was stored, so that the report
-    route knows it is coming; removed by the supervisor when the process ends) and renamed.
-    """
-    error_file = directory.with_name(directory.name + ".error")
-    tmp = directory.with_name(directory.name + ".tmp")
-    try:
-        directory.parent.mkdir(parents=True, exist_ok=True)
-        from fmuid.report import write_report as report
-
-        report(result, tmp, fmu=fmu, experiments=experiments, spec=spec)
-    except Exception as exc:  # a failed report must not fail a finished job
-        logger.exception("report of %s failed", directory.name)
-        shutil.rmtree(tmp, ignore_errors=True)
-        with contextlib.suppress(OSError):
-            error_file.write_text(f"{type(exc).__name__}: {exc}")
-        return
-    shutil.rmtree(directory, ignore_errors=True)
-    os.replace(tmp, directory)
-    error_file.unlink(missing_ok=True)
-
-
-def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: str | None) -> int:
+def run_job(store: JobStore, job: Job, memory_mb: int, dask: str | None) -> int:
     """Run ``job`` and record its outcome; return the process exit status (0 when done)."""
     from fmuid.data import load_experiment, spec_from_json
 
     progress = ProgressWriter(store, job.id)
-    with tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp:
+    # a design keeps its finished evaluations here until the job has an outcome: a job
+    # re-run after a restart of the service resumes from them
+    checkpoint = checkpoint_dir(store.blob_dir.parent, job.id)
+    with (
+        tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp,
+        _removed_after(checkpoint),
+    ):
         try:
             fmu, data = stage_inputs(store, job, Path(tmp))
             _log_fmi_version(fmu)
@@ -201,7 +189,7 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
                 experiments.append(load_space(data[0]))
             else:
                 experiments.extend(load_experiment(path) for path in data)
-            result = run_engine(job.kind, fmu, experiments, spec, progress, dask)
+            result = run_engine(job.kind, fmu, experiments, spec, progress, dask, checkpoint)
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:
             store.fail(job.id, str(exc))
@@ -224,8 +212,6 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
             traceback.print_exc()
             store.fail(job.id, f"internal error: {type(exc).__name__}: {exc}")
             return 1
-        with contextlib.suppress(OSError):  # says "being drawn" to the report route
-            (report_dir / f"{job.id}.tmp").mkdir(parents=True, exist_ok=True)
         try:
             stored = store.finish(job.id, result_json)
         except StoreError as exc:
@@ -234,8 +220,21 @@ def run_job(store: JobStore, job: Job, report_dir: Path, memory_mb: int, dask: s
         if not stored:
             logger.info("job %s was cancelled before it finished", job.id)
             return 0
-        write_report(result, report_dir / job.id, fmu, experiments, spec)
+        try:
+            keep_result(result, result_json, store.blob_dir.parent, job.id)
+        except Exception:  # the result is stored; only its report will be missing
+            logger.exception("job %s: could not keep the result object for its report", job.id)
     return 0
+
+
+@contextlib.contextmanager
+def _removed_after(folder: Path) -> Iterator[None]:
+    """Remove ``folder`` when the block ends normally (the job has its outcome).
+
+    Not when the process is killed or an exception escapes: the next run resumes from it.
+    """
+    yield
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def _log_fmi_version(fmu: Path) -> None:
@@ -271,15 +270,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     limit_process(args.memory_mb)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
+    logger.info("job %s in process %d, started by %d", args.job_id, os.getpid(), os.getppid())
     store = JobStore(args.db, args.data_dir)
     job = store.get(args.job_id)
     if job is None or job.status != "running":
         logger.warning("job %s is not running; nothing to do", args.job_id)
         return 0
     enforce_time_limit(store, job.id, args.timeout_s)
-    report_dir = args.data_dir / "reports"
     try:
-        return run_job(store, job, report_dir, args.memory_mb, args.dask_scheduler)
+        return run_job(store, job, args.memory_mb, args.dask_scheduler)
     except StoreError:
         logger.exception("job %s could not record its outcome", job.id)
         return STORE_FAILED_EXIT

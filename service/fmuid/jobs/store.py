@@ -357,6 +357,28 @@ class JobStore:
             )
         return cur.rowcount > 0
 
+    @retried
+    def requeue(self, job_id: str, reason: str) -> bool:
+        """Put a running job whose process was lost through no fault of its own back in the queue.
+
+        A job started :data:`MAX_ATTEMPTS` times already is failed with ``reason`` instead.
+        Returns whether the job was queued again.
+        """
+        with self.transaction() as conn:
+            cur = conn.execute(
+                "UPDATE jobs SET status = 'queued', pid = NULL, started = NULL"
+                " WHERE id = ? AND status = 'running' AND attempts < ?",
+                (job_id, MAX_ATTEMPTS),
+            )
+            if cur.rowcount:
+                return True
+            conn.execute(
+                "UPDATE jobs SET status = 'failed', error = ?, finished = ?, pid = NULL"
+                " WHERE id = ? AND status = 'running'",
+                (f"{reason} ({MAX_ATTEMPTS} attempts); not retried", time.time(), job_id),
+            )
+        return False
+
     def result(self, job_id: str) -> str | None:
         """Return the result JSON text of a done job, or ``None``."""
         row = (

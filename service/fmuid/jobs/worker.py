@@ -25,7 +25,7 @@ from pathlib import Path
 
 from fmuid.jobs import housekeeping as hk
 from fmuid.jobs.crash import exit_message
-from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmServer
+from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmProcess, WarmServer
 from fmuid.jobs.proc import end_processes, find_job_processes, kill_group
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.settings import Settings
@@ -72,7 +72,12 @@ class Supervisor:
         self._renewed = 0.0
         self._maintained = 0.0
         self._recovered = False
-        self._warm = WarmServer(settings.database)
+        self._warm = WarmServer(settings.database, settings.warm_recycle_jobs)
+
+    @property
+    def warm(self) -> WarmServer:
+        """The warm server that forks job (and report drawing) processes."""
+        return self._warm
 
     @property
     def busy(self) -> int:
@@ -211,16 +216,33 @@ class Supervisor:
         launch = Launch(job.id, args, log_path, tmp, self.settings.database)
         try:
             tmp.mkdir(parents=True, exist_ok=True)
-            process: JobProcess = (
-                self._warm.start(launch) if self.settings.warm_start else ColdProcess(launch)
-            )
+            process = self._start(launch)
         except OSError as exc:
             self.store.fail(job.id, f"could not start a job process: {exc}")
             return
         self.store.set_pid(job.id, process.pid)
         with self._lock:
             self._running[job.id] = _Running(job, process, log_path)
+        threading.Thread(target=self._wake_at_end, args=(process,), daemon=True).start()
         logger.info("job %s (%s) started in process %s", job.id, job.kind, process.pid)
+
+    def _start(self, launch: Launch) -> JobProcess:
+        """Fork the job process from the warm server; start it cold when that cannot be done.
+
+        While the warm server waits for its processes to end before it is replaced
+        (``FMUID_WARM_RECYCLE_JOBS``), jobs start cold.
+        """
+        if self.settings.warm_start and not self._warm.due():
+            try:
+                return self._warm.start(launch)
+            except Exception:  # a server that cannot fork must not lose the job
+                logger.exception("warm start of job %s failed; starting it cold", launch.job_id)
+        return ColdProcess(launch)
+
+    def _wake_at_end(self, process: JobProcess) -> None:
+        """Wake the loop as soon as ``process`` ends, so that the next job starts at once."""
+        process.wait_end()
+        self._wake.set()
 
     def _enforce_limits(self) -> None:
         with self._lock:
@@ -242,15 +264,20 @@ class Supervisor:
         for run in ended:
             kill_group(run.process.pid)  # pool workers the job left behind, before pid reuse
             returncode = run.process.wait()
-            data_dir = self.settings.data_dir
-            partial = data_dir / "reports" / f"{run.job.id}.tmp"
-            hk.remove_paths([hk.job_tmp_dir(data_dir, run.job.id), partial])
+            hk.remove_paths([hk.job_tmp_dir(self.settings.data_dir, run.job.id)])
             logger.info("job %s process ended with status %s", run.job.id, returncode)
             job = self.store.get(run.job.id)
-            if job is not None and job.status == "running":
-                log = run.log_path.read_text(errors="replace")
-                reason = exit_message(returncode, log, self.settings.job_memory_mb)
-                self._unrecorded[job.id] = reason
+            if job is None or job.status != "running":
+                continue
+            if isinstance(run.process, WarmProcess) and run.process.server_died():
+                reason = "its process died with the warm server that forked it"
+                queued = self.store.requeue(job.id, reason)
+                outcome = "queued again" if queued else "failed"
+                logger.warning("job %s: %s; %s", job.id, reason, outcome)
+                continue
+            log = run.log_path.read_text(errors="replace")
+            reason = exit_message(returncode, log, self.settings.job_memory_mb)
+            self._unrecorded[job.id] = reason
 
     def _record_unrecorded(self) -> None:
         for job_id, reason in list(self._unrecorded.items()):

@@ -75,8 +75,9 @@ def discrimination_figure(result: Discrimination, *, ax: AxesArg = None) -> Figu
     Returns
     -------
     Figure
-        The input panel over one panel per output, each with one line per hypothesis (the
-        figure holding ``ax`` when given; a new figure shares the time axis).
+        The input panel over one panel per output, each with one line per hypothesis and the
+        first hypothesis' noise band (+- the sensor's sigma, when known) (the figure holding
+        ``ax`` when given; a new figure shares the time axis).
 
     Raises
     ------
@@ -95,8 +96,12 @@ def discrimination_figure(result: Discrimination, *, ax: AxesArg = None) -> Figu
     axes[0].set_ylabel(result.input_name)
     axes[0].set_title(f"{result.trial.label}: expected chi2 separation {result.expected_chi2:.3g}")
     for a, o in zip(axes[1:], outputs, strict=True):
-        for name, pred in result.predictions.items():
-            a.plot(result.time, pred[o], label=name, gid=f"prediction_{name}")
+        for k, (name, pred) in enumerate(result.predictions.items()):
+            (line,) = a.plot(result.time, pred[o], label=name, gid=f"prediction_{name}")
+            if k == 0 and o in result.sigma:
+                band = (pred[o] - result.sigma[o], pred[o] + result.sigma[o])
+                a.fill_between(result.time, *band, color=line.get_color(), alpha=0.2, lw=0,
+                               label=f"{name} \u00b1 noise sigma", gid="noise_band")  # fmt: skip
         a.set_ylabel(o)
         a.legend(fontsize="small")
     axes[-1].set_xlabel("time [s]")

@@ -192,7 +192,15 @@ def run_branch_anywhere(
     ``reset_unreliable`` carries the submitting process's verdict on the FMU's reset (its
     workers do not inherit it, as forked local workers do).
     """
-    path = Path(task.problem.fmu_path)
+    use_fmu_here(task.problem.fmu_path, sha256, fmu_bytes)
+    if reset_unreliable:
+        mark_reset_unreliable(task.problem.fmu_path, task.problem.spec.interface)
+    return run_branch(task)
+
+
+def use_fmu_here(fmu_path: str | Path, sha256: str, fmu_bytes: bytes) -> None:
+    """Make ``fmu_path`` open the FMU of ``sha256`` on this worker: a local copy if it differs."""
+    path = Path(fmu_path)
     if _file_sha256(path) != sha256:
         local = Path(tempfile.gettempdir()) / "fmuid-fmus" / sha256 / path.name
         if _file_sha256(local) != sha256:
@@ -201,9 +209,6 @@ def run_branch_anywhere(
             tmp.write_bytes(fmu_bytes)
             tmp.replace(local)
         register_fmu_copy(path, local)
-    if reset_unreliable:
-        mark_reset_unreliable(path, task.problem.spec.interface)
-    return run_branch(task)
 
 
 @functools.lru_cache(maxsize=64)

@@ -11,7 +11,8 @@ from fmuid.diagnose.result import verdict
 from fmuid.diagnose.series import diagnosis_series
 from fmuid.errors import FmuidError
 from fmuid.fit.problem import Problem
-from fmuid.plots import diagnosis_figures, discrimination_figure
+from fmuid.plots import diagnosis_figures
+from fmuid.report.design import discrimination_section
 from fmuid.report.page import HtmlPage, fmt, interval
 
 logger = logging.getLogger(__name__)
@@ -199,31 +200,8 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
 
 def _settling_test(page: HtmlPage, proposal: dict[str, Any] | None) -> None:
     """Add the test that would settle a tie, with both explanations' predictions under it."""
-    if not proposal:
-        return
-    found = discrimination_from_dict(proposal)
-    experiment = proposal["experiment"]
-    settings = ", ".join(f"{k} {fmt(v, 3)}" for k, v in experiment["settings"].items())
-    page.heading("A test that would settle the tie")
-    page.table(
-        ["quantity", "value"],
-        [
-            ["input", f"{experiment['input']} of {experiment['input_variable']} ({settings})"],
-            ["duration [s]", experiment["duration"]],
-            ["sampling rate [Hz]", experiment["rate_hz"]],
-            ["outputs measured", ", ".join(experiment["outputs"])],
-            ["hypotheses", " vs ".join(found.hypotheses)],
-            *[[f"chi2 of {k}", v] for k, v in found.separation.items()],
-            ["expected p-value of the likelihood-ratio test", proposal["expected_p_value"]],
-            ["tests screened", found.screened],
-        ],
-        table_id="settling_test",
-    )
-    page.figure(
-        discrimination_figure(found),
-        "diagnose_settling_test",
-        "The proposed input and both explanations' noise-free predictions under it.",
-    )
+    if proposal:
+        discrimination_section(page, discrimination_from_dict(proposal))
 
 
 def _units(problem: Problem | None) -> dict[str, str]:

@@ -74,7 +74,7 @@ def write_report(
     from fmuid.design import DesignResult
 
     if isinstance(result, DesignResult):
-        from fmuid.design.report import write_design_report
+        from fmuid.report.design import write_design_report
 
         return write_design_report(result, Path(directory))
     if problem is None and fmu is not None and experiments is not None and spec is not None:

@@ -15,6 +15,7 @@ from fmuid.api.deps import (
     get_store_health,
     get_supervisor,
 )
+from fmuid.api.forms import FormOffLoop
 from fmuid.api.results import ResultOut
 from fmuid.api.schemas import ErrorOut, JobCreated, JobList, JobOut, Kind
 from fmuid.api.submission import SubmissionError, Upload, submit
@@ -25,7 +26,7 @@ from fmuid.jobs.store import FINAL_STATUSES, Job, JobStore, QueueFull
 from fmuid.jobs.worker import Supervisor
 from fmuid.settings import Settings
 
-router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=FormOffLoop)
 
 SQLITE_MAX_INT = 2**63 - 1  # larger integers overflow SQLite's OFFSET (found by schemathesis)
 

@@ -1,7 +1,7 @@
 """``/v1/jobs/{id}/report``: the HTML report of a done job and the image files beside it.
 
-The job process writes the report (``<data_dir>/reports/<id>/index.html`` and PNGs) right after
-storing the result; here it is only served (after waiting while it is still being drawn). The
+The report (``<data_dir>/reports/<id>/index.html`` and PNGs) is drawn on the first request for it
+or one of its files (:mod:`fmuid.api.drawing`: once, in a process), then served. The
 page gets ``<base href="report/">`` so that its relative image links resolve under
 ``/v1/jobs/{id}/report/``; with ``FMUID_API_TOKEN`` set, each such link carries a signature that
 opens that file in a browser (:func:`fmuid.api.auth.sign`).
@@ -10,7 +10,6 @@ opens that file in a browser (:func:`fmuid.api.auth.sign`).
 from __future__ import annotations
 
 import re
-import time
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -18,15 +17,14 @@ from fastapi import APIRouter, Depends, HTTPException
 from fastapi.responses import FileResponse, HTMLResponse
 
 from fmuid.api.auth import sign
-from fmuid.api.deps import get_job, get_settings
+from fmuid.api.deps import get_drawer, get_job, get_settings
+from fmuid.api.drawing import DrawingFailed, ReportDrawer
 from fmuid.api.schemas import ErrorOut
 from fmuid.jobs.store import Job
 from fmuid.settings import Settings
 
 router = APIRouter(prefix="/v1/jobs", tags=["reports"])
 
-REPORT_WAIT_S = 60.0
-"""The result is stored before the report is drawn: a report asked for meanwhile waits this long."""
 _FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 _LINK = re.compile(r'\b(src|href)="([A-Za-z0-9_][A-Za-z0-9_.-]*)"')
 """A link to a file beside the page (which gets a signature when a token is set)."""
@@ -36,33 +34,19 @@ _RESPONSES: dict[int | str, dict[str, Any]] = {
     401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
     404: {"model": ErrorOut, "description": "No such job or file."},
     409: {"model": ErrorOut, "description": "The job is not done."},
-    503: {"model": ErrorOut, "description": "No report could be written for this job."},
+    503: {"model": ErrorOut, "description": "The report could not be drawn (the cause)."},
 }
 
 
-def _report_dir(job: Job, settings: Settings) -> Path:
+async def _report_dir(job: Job, drawer: ReportDrawer) -> Path:
     if job.status != "done":
         raise HTTPException(status_code=409, detail=f"job {job.id} is {job.status}; no report")
-    directory = settings.data_dir / "reports" / job.id
-    _wait_while_drawn(directory)
-    error = directory.with_name(job.id + ".error")
-    if error.is_file():
+    try:
+        return await drawer.report_dir(job.id)
+    except DrawingFailed as exc:
         raise HTTPException(
-            status_code=503, detail=f"the report of job {job.id} failed: {error.read_text()}"
-        )
-    if not (directory / "index.html").is_file():
-        raise HTTPException(
-            status_code=503, detail=f"no report was written for job {job.id} (fmuid.report missing)"
-        )
-    return directory
-
-
-def _wait_while_drawn(directory: Path) -> None:
-    """Wait (at most :data:`REPORT_WAIT_S`) while the job process draws the report of a done job."""
-    drawing = directory.with_name(directory.name + ".tmp")
-    deadline = time.monotonic() + REPORT_WAIT_S
-    while drawing.is_dir() and not directory.is_dir() and time.monotonic() < deadline:
-        time.sleep(0.1)
+            status_code=503, detail=f"the report of job {job.id} could not be drawn: {exc}"
+        ) from exc
 
 
 @router.get(
@@ -70,11 +54,13 @@ def _wait_while_drawn(directory: Path) -> None:
     response_class=HTMLResponse,
     responses={**_RESPONSES, 200: {"content": {"text/html": {}}, "description": "The report."}},
 )
-def get_report(
-    job: Annotated[Job, Depends(get_job)], settings: Annotated[Settings, Depends(get_settings)]
+async def get_report(
+    job: Annotated[Job, Depends(get_job)],
+    settings: Annotated[Settings, Depends(get_settings)],
+    drawer: Annotated[ReportDrawer, Depends(get_drawer)],
 ) -> HTMLResponse:
-    """Give the HTML report of a done job: plots and tables."""
-    html = (_report_dir(job, settings) / "index.html").read_text(encoding="utf-8")
+    """Give the HTML report of a done job: plots and tables (drawn on the first request)."""
+    html = (await _report_dir(job, drawer) / "index.html").read_text(encoding="utf-8")
     base = '<base href="report/">'
     head = re.search(r"<head[^>]*>", html, flags=re.IGNORECASE)
     html = html[: head.end()] + base + html[head.end() :] if head else base + html
@@ -94,13 +80,13 @@ def get_report(
         200: {"content": {"image/png": {}}, "description": "A figure of the report."},
     },
 )
-def get_report_file(
+async def get_report_file(
     file_name: str,
     job: Annotated[Job, Depends(get_job)],
-    settings: Annotated[Settings, Depends(get_settings)],
+    drawer: Annotated[ReportDrawer, Depends(get_drawer)],
 ) -> FileResponse:
     """Give one file of a job's report (an image the page links)."""
-    directory = _report_dir(job, settings)
+    directory = await _report_dir(job, drawer)
     path = directory / file_name
     if len(file_name) > MAX_FILE_NAME or not _FILE_NAME.fullmatch(file_name) or not path.is_file():
         raise HTTPException(status_code=404, detail=f"no file {file_name[:80]!r} in the report")

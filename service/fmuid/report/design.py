@@ -1,12 +1,56 @@
-"""Report page of a design study (its figures are in :mod:`fmuid.plots.design`)."""
+"""Report pages of a design study and of a discrimination proposal.
+
+Their figures are drawn by :mod:`fmuid.plots.design`.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from fmuid.design.discriminate import Discrimination
 from fmuid.design.result import DesignResult
-from fmuid.plots.design import widths_figure
-from fmuid.report.page import HtmlPage, interval
+from fmuid.plots.design import discrimination_figure, widths_figure
+from fmuid.report.page import HtmlPage, fmt, interval
+
+
+def discrimination_section(page: HtmlPage, result: Discrimination) -> None:
+    """Add the proposed test to a page: its settings, the expected separation, noise, figure."""
+    a, b = result.hypotheses
+    doc = result.to_dict()
+    page.heading(f"The test that tells {a} from {b}")
+    page.paragraph(
+        f"Proposed: {result.trial.label}, driving {result.input_name}, measuring "
+        f"{', '.join(result.trial.outputs)} ({result.screened} tests screened). Fitted to data "
+        f"made by the other, the wrong hypothesis is expected to miss by chi2 = "
+        f"{fmt(result.expected_chi2)} at the stated noise (a likelihood-ratio statistic of that "
+        f"size has p = {fmt(doc['expected_p_value'], 2)})."
+    )
+    page.table(
+        ["fit", "expected chi2 (noise-free data)"],
+        [[name, value] for name, value in result.separation.items()],
+        table_id="separation",
+        caption="Weighted misfit of each hypothesis fitted to the other's prediction",
+    )
+    page.table(
+        ["sensor", "noise sigma"],
+        [[o, result.sigma.get(o)] for o in result.trial.outputs],
+        table_id="noise",
+        caption="Noise the separation is computed at (the unit of each output)",
+    )
+    page.figure(
+        discrimination_figure(result),
+        "discrimination",
+        f"Input of the proposed test and both hypotheses' predictions under it ({a} with its "
+        "noise band)",
+    )
+
+
+def write_discrimination_report(result: Discrimination, directory: Path) -> Path:
+    """Write ``index.html`` of a discrimination proposal (:func:`discrimination_section`)."""
+    a, b = result.hypotheses
+    page = HtmlPage(Path(directory), f"Model discrimination: {a} versus {b}")
+    discrimination_section(page, result)
+    return page.write()
 
 
 def write_design_report(result: DesignResult, directory: Path) -> Path:

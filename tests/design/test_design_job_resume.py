@@ -1,0 +1,72 @@
+"""A design job killed mid-study and queued again by a restarted service resumes its work."""
+
+import json
+import shutil
+
+from design_cases import MSD_SPACE, MSD_SPEC, SMALL, Stop, comparable, counting
+
+from fmuid.jobs import housekeeping as hk
+from fmuid.jobs import run
+from fmuid.jobs.store import Dataset, JobStore
+from fmuid.model.builtin import builtin_fmu
+
+
+def upload(store, source=None, text=None):
+    path = store.tmp_dir() / "upload"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if source is not None:
+        shutil.copyfile(source, path)
+    else:
+        path.write_text(text)
+    return store.add_file(path)
+
+
+def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
+    tmp_path, serial, monkeypatch
+):
+    store = JobStore(tmp_path / "jobs.sqlite", tmp_path)
+    space = upload(store, text=json.dumps({**MSD_SPACE, **SMALL}))
+    job = store.create(
+        "design", json.dumps(MSD_SPEC), upload(store, builtin_fmu("msd")), "msd",
+        [Dataset("E.json", space)],
+    )  # fmt: skip
+    calls = counting(monkeypatch)
+    events = []
+
+    def killed_after_five(self, event):
+        events.append(event)
+        if len(events) == 5:
+            raise Stop  # the service dies: no outcome is recorded
+
+    with monkeypatch.context() as m:
+        m.setattr(run.ProgressWriter, "__call__", killed_after_five)
+        try:
+            run.run_job(store, store.claim_next(), tmp_path / "reports", 2000, None)
+        except Stop:
+            pass
+    assert calls["screen"] == 5 and store.get(job.id).status == "running"
+    assert hk.checkpoint_dir(tmp_path, job.id).is_dir()
+    hk.remove_orphans(store, tmp_path, alive=set())  # what a restart sweeps keeps it
+    assert [j.id for j in store.recover()] == [job.id]
+    hk.remove_orphans(store, tmp_path, alive=set())
+    calls.update(screen=0, verify=0)
+    assert run.run_job(store, store.claim_next(), tmp_path / "reports", 2000, None) == 0
+    assert store.get(job.id).status == "done"
+    assert calls == {"screen": 8 - 5 + 1, "verify": 2}  # + the rate-halved trade-off
+    assert not hk.checkpoint_dir(tmp_path, job.id).exists()
+    assert comparable(json.loads(store.result(job.id))) == comparable(serial.to_dict())
+
+
+def test_a_finished_or_removed_job_leaves_no_checkpoint(tmp_path):
+    store = JobStore(tmp_path / "jobs.sqlite", tmp_path)
+    fmu = upload(store, text="fmu")
+    queued = store.create("design", "{}", fmu, "m", [])
+    failed = store.create("design", "{}", fmu, "m", [])
+    store.fail(failed.id, "exceeded the time limit of 1 s")
+    for job_id in (queued.id, failed.id, "no-such-job"):
+        hk.checkpoint_dir(tmp_path, job_id).mkdir(parents=True)
+    hk.remove_orphans(store, tmp_path, alive=set())
+    assert hk.checkpoint_dir(tmp_path, queued.id).is_dir()
+    assert not hk.checkpoint_dir(tmp_path, failed.id).exists()
+    assert not hk.checkpoint_dir(tmp_path, "no-such-job").exists()
+    assert hk.checkpoint_dir(tmp_path, failed.id) in hk.job_files(tmp_path, failed.id)
