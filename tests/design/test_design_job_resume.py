@@ -41,7 +41,7 @@ def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
     with monkeypatch.context() as m:
         m.setattr(run.ProgressWriter, "__call__", killed_after_five)
         try:
-            run.run_job(store, store.claim_next(), tmp_path / "reports", 2000, None)
+            run.run_job(store, store.claim_next(), 2000, None)
         except Stop:
             pass
     assert calls["screen"] == 5 and store.get(job.id).status == "running"
@@ -50,7 +50,7 @@ def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
     assert [j.id for j in store.recover()] == [job.id]
     hk.remove_orphans(store, tmp_path, alive=set())
     calls.update(screen=0, verify=0)
-    assert run.run_job(store, store.claim_next(), tmp_path / "reports", 2000, None) == 0
+    assert run.run_job(store, store.claim_next(), 2000, None) == 0
     assert store.get(job.id).status == "done"
     assert calls == {"screen": 8 - 5 + 1, "verify": 2}  # + the rate-halved trade-off
     assert not hk.checkpoint_dir(tmp_path, job.id).exists()
