@@ -29,9 +29,9 @@ import numpy as np
 
 from fmuid.data import spec_from_json
 from fmuid.demo import BOUNDS, NOMINAL
-from fmuid.design import design, space_from_json
-from fmuid.design.signals import Trial
-from fmuid.design.verify import verify
+from fmuid.experiment_design import design, space_from_json
+from fmuid.experiment_design.signals import Trial
+from fmuid.experiment_design.verify import verify
 from fmuid.model.builtin import builtin_fmu
 from fmuid.model.fmu import FmuModel
 from fmuid.model.simulator import Simulator

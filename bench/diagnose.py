@@ -40,7 +40,7 @@ sys.path.insert(0, str(ROOT / "service"))
 import concealed as cc  # noqa: E402
 import fieldtruth as ft  # noqa: E402
 from diagnose_tables import CATALOGUE, print_false_alarm, print_tables  # noqa: E402
-from fmuid.diagnose import DiagnoseOptions, diagnose  # noqa: E402
+from fmuid.discrepancy import DiagnoseOptions, diagnose  # noqa: E402
 from fmuid.model.builtin import builtin_fmu  # noqa: E402
 from operational import study_spec  # noqa: E402
 

@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fmuid.fit.optimize import fit_problem
-from fmuid.fit.problem import Problem
+from fmuid.estimation.optimize import fit_problem
+from fmuid.estimation.problem import Problem
 from fmuid.model.builtin import builtin_fmu
-from fmuid.profile.engine import profile_problem, thresholds
-from fmuid.profile.result import ProfileResult
+from fmuid.profiling.engine import profile_problem, thresholds
+from fmuid.profiling.result import ProfileResult
 from fmuid.stages import make_problem
 
 HERE = Path(__file__).resolve().parent

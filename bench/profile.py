@@ -19,7 +19,7 @@ import numpy as np
 import fmuid
 from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.demo import BOUNDS, NOMINAL
-from fmuid.fit.optimize import fit_problem
+from fmuid.estimation.optimize import fit_problem
 from fmuid.model.builtin import builtin_fmu
 from fmuid.model.simulator import Simulator
 from fmuid.stages import make_problem

@@ -28,9 +28,9 @@ from scipy.optimize import least_squares
 
 import fieldtruth as ft
 from fmuid.data import Experiment, Spec, spec_from_json
-from fmuid.fit.optimize import fit_problem
-from fmuid.fit.problem import Problem
-from fmuid.fit.result import FitResult
+from fmuid.estimation.optimize import fit_problem
+from fmuid.estimation.problem import Problem
+from fmuid.estimation.result import FitResult
 from fmuid.model.builtin import builtin_fmu
 from fmuid.model.simulator import get_simulator
 from fmuid.stages import make_problem

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fmuid.demo import BOUNDS, DESIGNS, NOMINAL, OUTPUTS, simulate_dataset
+from fmuid.demo.thesis import BOUNDS, DESIGNS, NOMINAL, OUTPUTS, simulate_dataset
 
 
 def tractor_study(folder: Path, tractor_fmu: Path) -> list[str]:

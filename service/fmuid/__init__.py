@@ -1,10 +1,10 @@
 """fmuid: black-box identifiability of FMU parameters (fits, profile likelihoods, diagnosis).
 
-The stages are plain functions: ``fmuid.fit``, ``fmuid.profile``, ``fmuid.diagnose`` and
-``fmuid.design``;
-``fmuid.info`` describes a model, ``fmuid.load_result`` reads a saved result back. The
-subpackages ``fit``, ``profile`` and ``diagnose`` share the stages' names and hold their
-machinery; import from them with ``from fmuid.fit.problem import Problem`` style imports.
+The stages are plain functions: ``fmuid.fit``, ``fmuid.profile``,
+``fmuid.diagnose`` and ``fmuid.design``; ``fmuid.info`` describes a model, ``fmuid.load_result``
+reads a saved result back. Their machinery lives in packages with noun names, so no function
+shadows a package: :mod:`fmuid.estimation` (fits), :mod:`fmuid.profiling` (profile likelihoods),
+:mod:`fmuid.discrepancy` (diagnosis) and :mod:`fmuid.experiment_design` (experiment design).
 
 The stages are imported on first use, so that ``import fmuid`` (and ``fmuid --help``) stays fast.
 """
@@ -12,8 +12,6 @@ The stages are imported on first use, so that ``import fmuid`` (and ``fmuid --he
 from __future__ import annotations
 
 import importlib
-import sys
-import types
 from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
@@ -21,8 +19,8 @@ __version__ = "0.1.0"
 _LAZY = {
     "fit": "fmuid.stages",
     "profile": "fmuid.stages",
-    "diagnose": "fmuid.diagnose",
-    "design": "fmuid.design",
+    "diagnose": "fmuid.discrepancy",
+    "design": "fmuid.experiment_design",
     "info": "fmuid.model.info",
     "load_result": "fmuid.results",
 }
@@ -30,24 +28,11 @@ _LAZY = {
 __all__ = ["__version__", "design", "diagnose", "fit", "info", "load_result", "profile"]
 
 if TYPE_CHECKING:
-    from fmuid.design import design
-    from fmuid.diagnose import diagnose
+    from fmuid.discrepancy import diagnose
+    from fmuid.experiment_design import design
     from fmuid.model.info import info
     from fmuid.results import load_result
     from fmuid.stages import fit, profile
-
-
-class _Package(types.ModuleType):
-    """The ``fmuid`` module: its stage functions are never replaced by the same-named subpackages.
-
-    Importing a subpackage such as ``fmuid.fit`` sets the attribute ``fmuid.fit`` to it; the
-    stage function of that name stays, and the subpackage stays reachable by import.
-    """
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        if name in _LAZY and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
 
 
 def __getattr__(name: str) -> Any:
@@ -56,6 +41,3 @@ def __getattr__(name: str) -> Any:
     value = getattr(importlib.import_module(_LAZY[name]), name)
     globals()[name] = value
     return value
-
-
-sys.modules[__name__].__class__ = _Package

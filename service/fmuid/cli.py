@@ -124,7 +124,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
     from fmuid.data import load_experiment
-    from fmuid.fit.predictor import merged_inputs
+    from fmuid.estimation.predictor import merged_inputs
     from fmuid.model.fmu import USABLE, FmuModel
     from fmuid.model.simulator import Simulator
 
@@ -211,7 +211,7 @@ def _cmd_profile(args: argparse.Namespace) -> int:
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
-    from fmuid.diagnose import diagnose
+    from fmuid.discrepancy import diagnose
 
     fmu, experiments, spec = _load_inputs(args)
     with ProgressDisplay() as progress:
@@ -225,7 +225,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
 
 def _cmd_design(args: argparse.Namespace) -> int:
     from fmuid.data import load_spec
-    from fmuid.design import design, load_space
+    from fmuid.experiment_design import design, load_space
 
     fmu, spec, space = _fmu_path(args.fmu), load_spec(Path(args.spec)), load_space(args.space)
     with ProgressDisplay() as progress:

@@ -19,7 +19,7 @@ from fmuid.progress import Progress
 
 if TYPE_CHECKING:
     from fmuid.model.info import ModelInfo, VariableInfo
-    from fmuid.profile.result import ProfileResult
+    from fmuid.profiling.result import ProfileResult
 
 log = logging.getLogger("fmuid")
 

@@ -13,11 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from fmuid.diagnose.residual_tests import TestResult, Window
-from fmuid.diagnose.result import AddedEstimate, CandidateScore, Diagnosis
+from fmuid.discrepancy.residual_tests import TestResult, Window
+from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis
 from fmuid.errors import SpecError
-from fmuid.fit.result import Cost, FitResult
-from fmuid.profile.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
 
 PANDAS_MISSING = (
     "to_frame() needs pandas, which fmuid does not install by default; "
@@ -78,9 +78,11 @@ def result_from_dict(data: dict[str, Any]) -> Any:
 
 def _design_from_dict(data: dict[str, Any]) -> Any:
     try:
-        module = importlib.import_module("fmuid.design.result")
+        module = importlib.import_module("fmuid.experiment_design.result")
     except ImportError as exc:
-        raise SpecError("design results need fmuid.design, which this fmuid lacks") from exc
+        raise SpecError(
+            "design results need fmuid.experiment_design, which this fmuid lacks"
+        ) from exc
     reader = getattr(getattr(module, "DesignResult", None), "from_dict", None)
     if reader is None:
         raise SpecError("this fmuid cannot read design results back (no DesignResult.from_dict)")

@@ -8,14 +8,14 @@ from typing import Any
 
 from fmuid.data import Experiment, Spec, check_against_model
 from fmuid.errors import SpecError
-from fmuid.fit.optimize import fit_problem
-from fmuid.fit.problem import Problem
-from fmuid.fit.result import FitResult
+from fmuid.estimation.optimize import fit_problem
+from fmuid.estimation.problem import Problem
+from fmuid.estimation.result import FitResult
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import INTERFACES, FmuModel
 from fmuid.model.simulator import get_simulator
-from fmuid.profile.engine import profile_problem
-from fmuid.profile.result import ProfileResult
+from fmuid.profiling.engine import profile_problem
+from fmuid.profiling.result import ProfileResult
 from fmuid.progress import ProgressCallback
 
 

@@ -8,7 +8,7 @@ import pytest
 from design_cases import MSD_SPEC, SMALL, space_of
 
 from fmuid.data import spec_from_json
-from fmuid.design import design
+from fmuid.experiment_design import design
 
 
 @pytest.fixture

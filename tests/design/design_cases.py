@@ -2,9 +2,9 @@
 
 import json
 
-from fmuid.design import space_from_json
-from fmuid.design.engine import Screen
-from fmuid.design.verify import DrawTask
+from fmuid.experiment_design import space_from_json
+from fmuid.experiment_design.engine import Screen
+from fmuid.experiment_design.verify import DrawTask
 from fmuid.progress import Progress
 
 MSD_SPACE = {

@@ -7,10 +7,14 @@ import pytest
 from scipy.stats import chi2
 
 from fmuid.data import ParameterSpec, experiment_from_arrays, spec_from_json
-from fmuid.design import space_from_json
-from fmuid.design.discriminate import Hypothesis, default_space, discriminating_experiment
-from fmuid.fit.optimize import fit_problem
-from fmuid.fit.problem import Problem
+from fmuid.estimation.optimize import fit_problem
+from fmuid.estimation.problem import Problem
+from fmuid.experiment_design import space_from_json
+from fmuid.experiment_design.discriminate import (
+    Hypothesis,
+    default_space,
+    discriminating_experiment,
+)
 from fmuid.model.builtin import builtin_fmu
 from fmuid.plots import discrimination_figure
 from fmuid.report.design import write_discrimination_report

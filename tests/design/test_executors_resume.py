@@ -3,7 +3,7 @@
 import pytest
 from design_cases import SMALL, Stop, comparable, counting, space_of, stop_after
 
-from fmuid.design import design, tasks
+from fmuid.experiment_design import design, tasks
 
 
 def test_two_local_workers_give_the_serial_ranking_and_numbers(serial, msd_spec, monkeypatch):

@@ -8,9 +8,9 @@ from design_cases import space_of
 from scipy.integrate import solve_ivp
 
 from fmuid.data import spec_from_json
-from fmuid.design import design
-from fmuid.design.fisher import sensitivity, trial_problem
-from fmuid.design.signals import Trial, input_signal, output_times
+from fmuid.experiment_design import design
+from fmuid.experiment_design.fisher import sensitivity, trial_problem
+from fmuid.experiment_design.signals import Trial, input_signal, output_times
 from fmuid.model.builtin import builtin_fmu
 from fmuid.model.fmu import FmuModel
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import fieldtruth as ft
-from fmuid.fit.predictor import FmuPredictor
-from fmuid.fit.wrappers import AugmentedPredictor
+from fmuid.estimation.predictor import FmuPredictor
+from fmuid.estimation.wrappers import AugmentedPredictor
 
 WRAPPERS = {
     "sensor_lag": ("tau_sensor", ("sensor_lag", None)),

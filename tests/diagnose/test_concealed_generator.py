@@ -18,8 +18,8 @@ import concealed as cc
 import fieldtruth as ft
 import operational as op
 from fmuid.data import Experiment, ParameterSpec
-from fmuid.fit.optimize import fit_problem
-from fmuid.fit.problem import Problem
+from fmuid.estimation.optimize import fit_problem
+from fmuid.estimation.problem import Problem
 from fmuid.model.simulator import get_simulator
 
 

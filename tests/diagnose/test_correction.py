@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fmuid.diagnose.correction import arx_correction
-from fmuid.diagnose.residual_tests import Series
+from fmuid.discrepancy.correction import arx_correction
+from fmuid.discrepancy.residual_tests import Series
 
 
 def _series(extra: float, seed: int) -> Series:

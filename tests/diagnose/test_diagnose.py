@@ -16,8 +16,8 @@ import pytest
 from scipy import stats
 
 import fieldtruth as ft
-from fmuid.diagnose import DiagnoseOptions, diagnose
-from fmuid.diagnose.series import diagnosis_series
+from fmuid.discrepancy import DiagnoseOptions, diagnose
+from fmuid.discrepancy.series import diagnosis_series
 from fmuid.plots import diagnosis_figures
 from fmuid.stages import make_problem
 from operational import study_spec

@@ -14,9 +14,9 @@ import pytest
 from scipy import integrate, stats
 
 from fmuid.data import experiment_from_arrays, spec_from_json
-from fmuid.diagnose import generic
-from fmuid.diagnose.scan import sensitivity_basis
-from fmuid.fit.optimize import fit_problem, safe_residuals
+from fmuid.discrepancy import generic
+from fmuid.discrepancy.scan import sensitivity_basis
+from fmuid.estimation.optimize import fit_problem, safe_residuals
 from fmuid.stages import make_problem
 
 TRUE = {"m": 1.1, "k": 4.4, "b": 1.6}

@@ -6,8 +6,8 @@ import json
 from pathlib import Path
 
 from fmuid.data import spec_from_json
-from fmuid.diagnose.catalogue import catalogue
-from fmuid.diagnose.knowledge import model_knowledge, read_annotations
+from fmuid.discrepancy.catalogue import catalogue
+from fmuid.discrepancy.knowledge import model_knowledge, read_annotations
 
 PACKAGE = Path(__file__).resolve().parents[2] / "service" / "fmuid" / "diagnose"
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fmuid.diagnose.locate import effect_location
-from fmuid.diagnose.residual_tests import Series
+from fmuid.discrepancy.locate import effect_location
+from fmuid.discrepancy.residual_tests import Series
 
 
 def test_the_effect_is_located_where_and_at_the_frequency_it_acts() -> None:

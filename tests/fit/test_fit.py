@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 import fmuid
 from fmuid.data import experiment_from_arrays, spec_from_json
-from fmuid.fit.sigma import spline_residual_sigma
+from fmuid.estimation.sigma import spline_residual_sigma
 from fmuid.stages import make_problem
 
 

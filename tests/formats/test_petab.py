@@ -9,7 +9,7 @@ import fmuid
 from fmuid.cli import main
 from fmuid.data import experiment_from_arrays, load_experiment, load_spec, spec_from_json
 from fmuid.errors import SpecError
-from fmuid.fit.predictor import FmuPredictor
+from fmuid.estimation.predictor import FmuPredictor
 from fmuid.formats import read_petab, write_petab
 
 TRUTH = {"m": 1.1, "k": 4.4, "b": 1.6}

@@ -8,7 +8,7 @@ import fmuid
 from fmuid.cli import main
 from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.errors import DataError, SpecError
-from fmuid.fit.predictor import FmuPredictor
+from fmuid.estimation.predictor import FmuPredictor
 from fmuid.formats import fmu_unit_definitions, read_ssv, with_start_values, write_ssv
 from fmuid.formats.cli import write_csv
 from fmuid.formats.ssv import SSC, SSV

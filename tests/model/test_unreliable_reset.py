@@ -23,13 +23,13 @@ from scipy.stats import chi2 as chi2_dist
 import fmuid
 from fmuid.data import Experiment, experiment_from_arrays, spec_from_json
 from fmuid.errors import FmuError
-from fmuid.fit.optimize import jacobian
-from fmuid.fit.problem import Problem
+from fmuid.estimation.optimize import jacobian
+from fmuid.estimation.problem import Problem
 from fmuid.model.build import build_fmu
 from fmuid.model.builtin import model_src_dir
 from fmuid.model.host import HostedSimulator
 from fmuid.model.simulator import Simulator, fmu_summary, get_simulator
-from fmuid.profile.health import check_health
+from fmuid.profiling.health import check_health
 
 T = np.round(np.arange(0.0, 5.0 + 1e-9, 0.1), 10)
 M, B, SIGMA = 1.1, 1.6, 0.005

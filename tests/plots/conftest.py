@@ -1,6 +1,6 @@
 import pytest
 
-from fmuid.profile.result import ProfileResult
+from fmuid.profiling.result import ProfileResult
 from plots.toy import toy_profile_result
 
 

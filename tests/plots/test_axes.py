@@ -9,12 +9,12 @@ import pytest
 from matplotlib.figure import Figure
 
 from fmuid.data import experiment_from_arrays, spec_from_json
-from fmuid.design.discriminate import Discrimination
-from fmuid.design.signals import Trial
-from fmuid.diagnose.residual_tests import Series, Window
-from fmuid.diagnose.result import Diagnosis
-from fmuid.diagnose.series import DiagnosisSeries
-from fmuid.fit.series import ResidualSeries
+from fmuid.discrepancy.residual_tests import Series, Window
+from fmuid.discrepancy.result import Diagnosis
+from fmuid.discrepancy.series import DiagnosisSeries
+from fmuid.estimation.series import ResidualSeries
+from fmuid.experiment_design.discriminate import Discrimination
+from fmuid.experiment_design.signals import Trial
 from fmuid.plots import (
     ci_compilation_figure,
     ci_entries_from_profile,
@@ -27,8 +27,8 @@ from fmuid.plots import (
     profile_figure,
     trajectory_band_figure,
 )
-from fmuid.profile.band import OutputBand, PathBand, TrajectoryBand
-from fmuid.profile.result import ProfileResult
+from fmuid.profiling.band import OutputBand, PathBand, TrajectoryBand
+from fmuid.profiling.result import ProfileResult
 from fmuid.stages import make_problem
 
 T = np.linspace(0.0, 4.0, 41)

@@ -1,11 +1,11 @@
 import numpy as np
 
-from fmuid.demo import DESIGNS, NOMINAL, simulate_dataset, study_spec
-from fmuid.fit.result import Cost, FitResult
-from fmuid.fit.series import residual_series
+from fmuid.demo.thesis import DESIGNS, NOMINAL, simulate_dataset, study_spec
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.series import residual_series
 from fmuid.plots import fit_figure, trajectory_band_figure
-from fmuid.profile.band import trajectory_band
-from fmuid.profile.result import ParameterProfile, ProfilePoint, ProfileResult
+from fmuid.profiling.band import trajectory_band
+from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileResult
 from fmuid.stages import make_problem
 
 

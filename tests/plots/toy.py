@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fmuid.fit.result import Cost, FitResult
-from fmuid.profile.result import ParameterProfile, ProfilePoint, ProfileResult
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileResult
 
 THRESHOLDS = {"pointwise": 0.989, "simultaneous": 2.28}
 CHI2_OPT = 10.0

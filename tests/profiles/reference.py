@@ -11,7 +11,7 @@ import numpy as np
 from scipy.optimize import brentq, least_squares
 from scipy.stats import qmc
 
-from fmuid.fit.problem import Problem
+from fmuid.estimation.problem import Problem
 
 
 class ReferenceProfile:

@@ -4,8 +4,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from fmuid.profile.checks import basins
-from fmuid.profile.points import WalkPoint
+from fmuid.profiling.checks import basins
+from fmuid.profiling.points import WalkPoint
 
 BOX = SimpleNamespace(z_lower=np.array([0.0, -1.0]), z_upper=np.array([1.0, 1.0]))
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import fmuid
-from fmuid.fit.optimize import fit_problem
-from fmuid.profile.engine import thresholds
-from fmuid.profile.parallel import BranchTask, run_branch_anywhere
-from fmuid.profile.walk import WalkOptions
+from fmuid.estimation.optimize import fit_problem
+from fmuid.profiling.engine import thresholds
+from fmuid.profiling.parallel import BranchTask, run_branch_anywhere
+from fmuid.profiling.walk import WalkOptions
 from fmuid.stages import make_problem
 
 from .test_msd import msd_step_data, spec

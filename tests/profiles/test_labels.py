@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 import fmuid
-from fmuid.demo import DESIGNS, SNRS, simulate_dataset, study_spec
-from fmuid.profile.intervals import label
-from fmuid.profile.result import (
+from fmuid.demo.thesis import DESIGNS, SNRS, simulate_dataset, study_spec
+from fmuid.profiling.intervals import label
+from fmuid.profiling.result import (
     IDENTIFIABLE,
     PRACTICALLY_NON_IDENTIFIABLE,
     STRUCTURALLY_NON_IDENTIFIABLE,

@@ -134,8 +134,8 @@ def test_same_seed_same_result(msd_fmu):
 
 
 def test_better_optimum_found_on_a_profile_refits_and_redoes(msd_fmu):
-    from fmuid.fit.optimize import FitOptions, fit_problem
-    from fmuid.profile.engine import profile_problem
+    from fmuid.estimation.optimize import FitOptions, fit_problem
+    from fmuid.profiling.engine import profile_problem
     from fmuid.stages import make_problem
 
     truth = {"m": 1.1, "k": 4.4, "b": 1.6}

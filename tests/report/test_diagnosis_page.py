@@ -60,8 +60,8 @@ def _proposal():
     """A settling test as the diagnosis stores it (a step on input f, two outputs)."""
     import numpy as np
 
-    from fmuid.design.discriminate import Discrimination
-    from fmuid.design.signals import Trial
+    from fmuid.experiment_design.discriminate import Discrimination
+    from fmuid.experiment_design.signals import Trial
 
     time = np.linspace(0.0, 6.0, 61)
     trial = Trial("step", {"amplitude": 1.0, "time": 1.0}, 6.0, 10.0, ("x", "v"))
@@ -78,7 +78,7 @@ def _proposal():
 def test_a_settling_test_round_trips_through_json():
     import json
 
-    from fmuid.design.discriminate import discrimination_from_dict
+    from fmuid.experiment_design.discriminate import discrimination_from_dict
 
     doc = json.loads(json.dumps(_proposal().to_dict()))
     again = discrimination_from_dict(doc)

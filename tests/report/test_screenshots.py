@@ -11,8 +11,8 @@ import pytest
 
 import fmuid
 from fmuid.data import experiment_from_arrays, spec_from_json
-from fmuid.diagnose import diagnose
-from fmuid.fit.predictor import FmuPredictor
+from fmuid.discrepancy import diagnose
+from fmuid.estimation.predictor import FmuPredictor
 from fmuid.report import write_report
 from report.browser import chromium
 

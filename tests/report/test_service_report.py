@@ -11,7 +11,7 @@ import pytest
 
 from fmuid.client import FmuidClient
 from fmuid.data import experiment_from_arrays
-from fmuid.fit.predictor import FmuPredictor
+from fmuid.estimation.predictor import FmuPredictor
 from report.browser import check_report_page, chromium
 
 TRUTH = {"m": 1.1, "k": 4.4, "b": 1.6}

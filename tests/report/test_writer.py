@@ -3,7 +3,7 @@ import re
 from dataclasses import replace
 from html.parser import HTMLParser
 
-from fmuid.profile.result import ProfileQuality
+from fmuid.profiling.result import ProfileQuality
 from fmuid.report import write_report
 from plots.toy import toy_fit, toy_profile_result
 

@@ -26,7 +26,7 @@ from typing import Any
 
 from fmuid.jobs.proc import JOB_NICENESS
 from fmuid.jobs.store import JobStore
-from fmuid.profile.pool_guard import die_with_pool_owner
+from fmuid.profiling.pool_guard import die_with_pool_owner
 
 logger = logging.getLogger(__name__)
 
@@ -118,7 +118,7 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
             fmu, data = stage_inputs(store, job, Path(work))
             spec = spec_from_json(job.spec, "spec")
             if job.kind == "design":
-                from fmuid.design import load_space
+                from fmuid.experiment_design import load_space
 
                 experiments: list[Any] = [load_space(data[0])]
             else:

@@ -184,7 +184,7 @@ def run_job(store: JobStore, job: Job, memory_mb: int, dask: str | None) -> int:
             spec = spec_from_json(job.spec, "spec")
             experiments: list[Any] = []
             if job.kind == "design":
-                from fmuid.design import load_space
+                from fmuid.experiment_design import load_space
 
                 experiments.append(load_space(data[0]))
             else:

@@ -120,10 +120,10 @@ def vet(task: VetTask) -> dict[str, Any]:
 def _check_design(path: Path, spec: Spec, model: FmuModel, limits: InputLimits) -> None:
     """Check a design job's experiment space (held to the spec's size limit) against the FMU.
 
-    :mod:`fmuid.design` is imported on the first design check only: it brings the engine (about
-    3 s and 100 MB), which the other checks do not need.
+    :mod:`fmuid.experiment_design` is imported on the first design check only: it brings the
+    engine (about 3 s and 100 MB), which the other checks do not need.
     """
-    from fmuid.design.space import check_design, space_from_json
+    from fmuid.experiment_design.space import check_design, space_from_json
 
     if path.stat().st_size > limits.max_spec_bytes:
         raise SpecError(f"space: {over_limit('bytes', 'max_spec_bytes', limits)}")

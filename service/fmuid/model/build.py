@@ -223,7 +223,7 @@ def _render_annotations(parent: ET.Element, block: dict[str, Any]) -> None:
     Switchable physics become ``<Physics effect description>`` elements holding one
     ``<Parameter name off start lower upper .../>`` each; roles of variables (e.g. the steer
     input) become ``<Role variable role/>``; all inside one ``<Model>`` element, as the FMI
-    schema allows one element per tool (read by :mod:`fmuid.diagnose.knowledge`).
+    schema allows one element per tool (read by :mod:`fmuid.discrepancy.knowledge`).
     """
     tool = ET.SubElement(ET.SubElement(parent, "Tool", name="fmuid"), "Model")
     for effect, physics in block.get("physics", {}).items():

@@ -3,7 +3,7 @@
 ``fmuid info`` runs the FMU three times at its start values, the inputs held at their start
 values, over its default experiment (or one second): a fresh instance, the same instance after
 a reset (the simulator compares the two; see :mod:`fmuid.model.simulator`), and once more.
-The profile stage's health check (:mod:`fmuid.profile.health`) goes further with data: the
+The profile stage's health check (:mod:`fmuid.profiling.health`) goes further with data: the
 objective's noise floor and its jumps along each parameter.
 """
 

@@ -1,8 +1,8 @@
 """Matplotlib figures drawn from fmuid results; every function returns a ``Figure``.
 
 Plot functions never simulate: they draw results and the data objects that the engine makes
-(``fmuid.fit.series.residual_series``, ``fmuid.profile.band.trajectory_band``,
-``fmuid.diagnose.series.diagnosis_series``; a discrimination proposal carries its predictions).
+(``fmuid.estimation.series.residual_series``, ``fmuid.profiling.band.trajectory_band``,
+``fmuid.discrepancy.series.diagnosis_series``; a discrimination proposal carries its predictions).
 
 Every function takes ``ax=``: by default it draws a new figure; given axes, it draws into them
 and returns the figure that holds them. A one-panel plot takes one ``Axes``; a plot of several

@@ -9,7 +9,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from fmuid.plots._common import AxesArg, panels
-from fmuid.profile.result import ProfileResult
+from fmuid.profiling.result import ProfileResult
 
 BAR_COLOR = "tab:red"
 ESTIMATE_MARKER_COLOR = "tab:green"

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from fmuid.design.discriminate import Discrimination
-from fmuid.design.result import DesignResult
-from fmuid.design.signals import input_signal
+from fmuid.experiment_design.discriminate import Discrimination
+from fmuid.experiment_design.result import DesignResult
+from fmuid.experiment_design.signals import input_signal
 from fmuid.plots._common import AxesArg, panels
 
 
@@ -17,7 +17,7 @@ def widths_figure(result: DesignResult, *, ax: AxesArg = None, top: int = 4) -> 
     Parameters
     ----------
     result
-        The design study (``fmuid.design.design``).
+        The design study (``fmuid.experiment_design.design``).
     ax
         Draw into this ``Axes`` (or a sequence holding one) instead of a new figure.
     top
@@ -67,7 +67,8 @@ def discrimination_figure(result: Discrimination, *, ax: AxesArg = None) -> Figu
     Parameters
     ----------
     result
-        The proposal (``fmuid.design.discriminate``); its predictions were simulated there.
+        The proposal (``fmuid.experiment_design.discriminate``); its predictions were simulated
+        there.
     ax
         Draw into these axes instead of a new figure: one for the input, then one per sensor
         output of the proposed test (``1 + len(result.trial.outputs)``).

@@ -1,6 +1,6 @@
 """Figures of a diagnosis: fit overlay, residuals with the located windows, residual spectrum.
 
-They only draw what :func:`fmuid.diagnose.series.diagnosis_series` simulated. Each figure has
+They only draw what :func:`fmuid.discrepancy.series.diagnosis_series` simulated. Each figure has
 one panel per output and experiment; ``ax=`` takes them row by row (one row per output, one
 column per experiment, as ``plt.subplots(n_outputs, n_experiments)`` gives them).
 """
@@ -14,9 +14,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
-from fmuid.diagnose.residual_tests import FALSE_ALARM, Series, periodogram
-from fmuid.diagnose.result import Diagnosis
-from fmuid.diagnose.series import DiagnosisSeries
+from fmuid.discrepancy.residual_tests import FALSE_ALARM, Series, periodogram
+from fmuid.discrepancy.result import Diagnosis
+from fmuid.discrepancy.series import DiagnosisSeries
 from fmuid.plots._common import AxesArg, panels, unit_label
 
 SMOOTH = 5
@@ -31,7 +31,7 @@ def diagnosis_figures(diagnosis: Diagnosis, series: DiagnosisSeries) -> dict[str
     diagnosis
         The result of ``fmuid.diagnose``.
     series
-        What to draw (:func:`fmuid.diagnose.series.diagnosis_series`); nothing is simulated here.
+        What to draw (:func:`fmuid.discrepancy.series.diagnosis_series`); nothing is simulated here.
 
     Returns
     -------
@@ -52,7 +52,7 @@ def diagnosis_fit_figure(series: DiagnosisSeries, *, ax: AxesArg = None) -> Figu
     Parameters
     ----------
     series
-        What to draw (:func:`fmuid.diagnose.series.diagnosis_series`).
+        What to draw (:func:`fmuid.discrepancy.series.diagnosis_series`).
     ax
         Draw into these axes instead of a new figure: ``n_outputs * n_experiments`` of them,
         row by row (one row per output, one column per experiment).

@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy import stats
 
-from fmuid.fit.series import ResidualSeries
+from fmuid.estimation.series import ResidualSeries
 from fmuid.plots._common import DATA_COLOR, MODEL_COLOR, AxesArg, panels, unit_label
 
 PANELS_PER_SERIES = 4
@@ -26,7 +26,7 @@ def fit_figure(series: Sequence[ResidualSeries], *, ax: AxesArg = None) -> Figur
     ----------
     series
         Data and model of each experiment and output:
-        ``fmuid.fit.series.residual_series(problem, fit.estimates)``.
+        ``fmuid.estimation.series.residual_series(problem, fit.estimates)``.
     ax
         Draw into these axes instead of a new figure: ``4 * len(series)`` of them, in the
         order above (time history, residuals, Q-Q, histogram of the first series, then of the

@@ -19,7 +19,7 @@ from fmuid.plots._common import (
     panels,
     to_plot_coordinate,
 )
-from fmuid.profile.result import ParameterProfile, ProfileResult
+from fmuid.profiling.result import ParameterProfile, ProfileResult
 
 
 def profile_figure(

@@ -5,7 +5,7 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from fmuid.plots._common import DATA_COLOR, AxesArg, panels, unit_label
-from fmuid.profile.band import TrajectoryBand
+from fmuid.profiling.band import TrajectoryBand
 
 BAND_COLOR = "tab:red"
 
@@ -20,7 +20,7 @@ def trajectory_band_figure(band: TrajectoryBand, *, ax: AxesArg = None) -> Figur
     Parameters
     ----------
     band
-        The simulated band: ``fmuid.profile.band.trajectory_band(problem, profile_result)``.
+        The simulated band: ``fmuid.profiling.band.trajectory_band(problem, profile_result)``.
     ax
         Draw into these axes instead of a new figure: one per output panel, then one per path
         panel (``len(band.outputs) + len(band.paths)``). A new figure also gets a title that

@@ -14,7 +14,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from fmuid.profile.result import IDENTIFIABLE, ParameterProfile, ProfileResult
+from fmuid.profiling.result import IDENTIFIABLE, ParameterProfile, ProfileResult
 from fmuid.report.page import Cell
 
 MIN_SPAN = 0.05

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from fmuid.design.discriminate import Discrimination
-from fmuid.design.result import DesignResult
+from fmuid.experiment_design.discriminate import Discrimination
+from fmuid.experiment_design.result import DesignResult
 from fmuid.plots.design import discrimination_figure, widths_figure
 from fmuid.report.page import HtmlPage, fmt, interval
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import logging
 from typing import Any
 
-from fmuid.design.discriminate import discrimination_from_dict
-from fmuid.diagnose.catalogue import study_catalogue
-from fmuid.diagnose.result import verdict
-from fmuid.diagnose.series import diagnosis_series
+from fmuid.discrepancy.catalogue import study_catalogue
+from fmuid.discrepancy.result import verdict
+from fmuid.discrepancy.series import diagnosis_series
 from fmuid.errors import FmuidError
-from fmuid.fit.problem import Problem
+from fmuid.estimation.problem import Problem
+from fmuid.experiment_design.discriminate import discrimination_from_dict
 from fmuid.plots import diagnosis_figures
 from fmuid.report.design import discrimination_section
 from fmuid.report.page import HtmlPage, fmt, interval

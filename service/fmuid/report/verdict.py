@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from fmuid.profile.result import IDENTIFIABLE, ParameterProfile, ProfileQuality, ProfileResult
+from fmuid.profiling.result import IDENTIFIABLE, ParameterProfile, ProfileQuality, ProfileResult
 
 _QUALITY_WORDS = (
     ("checks", "valley check", "valley checks"),

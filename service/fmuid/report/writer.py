@@ -11,23 +11,23 @@ import matplotlib
 from matplotlib.figure import Figure
 
 from fmuid.errors import FmuidError
-from fmuid.fit.result import FitResult
-from fmuid.fit.series import residual_series
+from fmuid.estimation.result import FitResult
+from fmuid.estimation.series import residual_series
 from fmuid.plots import (
     fit_figure,
     parameter_paths_figure,
     profile_figure,
     trajectory_band_figure,
 )
-from fmuid.profile.band import trajectory_band
-from fmuid.profile.result import ParameterProfile, ProfileResult
+from fmuid.profiling.band import trajectory_band
+from fmuid.profiling.result import ParameterProfile, ProfileResult
 from fmuid.report.diagnosis import diagnosis_sections
 from fmuid.report.page import HtmlPage, fmt, interval
 from fmuid.report.verdict import profile_verdict, quality_text
 
 if TYPE_CHECKING:
     from fmuid.data import Experiment, Spec
-    from fmuid.fit.problem import Problem
+    from fmuid.estimation.problem import Problem
 
 logger = logging.getLogger(__name__)
 
@@ -71,14 +71,14 @@ def write_report(
         The ``index.html`` written.
 
     """
-    from fmuid.design import DesignResult
+    from fmuid.experiment_design import DesignResult
 
     if isinstance(result, DesignResult):
         from fmuid.report.design import write_design_report
 
         return write_design_report(result, Path(directory))
     if problem is None and fmu is not None and experiments is not None and spec is not None:
-        from fmuid.fit.problem import Problem
+        from fmuid.estimation.problem import Problem
 
         problem = Problem(fmu, experiments, spec)
     with matplotlib.rc_context({"text.parse_math": False}):  # a '$' in a name is text

@@ -1,0 +1,225 @@
+"""Decide: is there a mismatch, is a candidate significant, which candidates tie.
+
+**One family, one level.** ``mismatch`` is decided by a weighted Holm procedure (valid under
+any dependence) over four groups of tests at the family-wise false-alarm level fixed in
+advance (1 %): the catalogue scan (weight :data:`SCAN_WEIGHT`), the generic error-model test
+(:data:`GENERIC_WEIGHT`, :mod:`.generic`: concealed effects outside the catalogue), the
+agreement of separate per-experiment fits (:data:`AGREEMENT_WEIGHT`) and the residual tests,
+which share the rest equally. The weights put the false-alarm budget where a concealed effect
+leaves its evidence (the likelihood ratio of the right augmentation, or input-driven structure
+that no move of the parameters reproduces); an effect that shows in the residuals leaves
+p-values far below any of these levels.
+
+**The scan's null distribution.** Each candidate's likelihood-ratio statistic has, under the
+base model, the null of :func:`~.scan.null_p_value` (chi-bar-square at a bound). The scan's
+p-value is that of the smallest candidate p-value, calibrated for the candidates' correlation
+(min-P, Westfall and Young): to first order, the statistics are functions of the projections
+``Z = U^T e`` of the noise on the candidates' score directions, ``Z ~ N(0, U^T U)``, which are
+drawn (seeded) to find the distribution of the smallest p-value. Look-alike candidates (a lag
+on the input or on the outputs) thus cost the family almost nothing extra. The Bonferroni bound
+caps it.
+
+**Ties.** Two significant candidates are indistinguishable when their fitted weighted
+predictions are equal (``equal_predictions``: no experiment of this design can tell them
+apart) or when Vuong's test between the non-nested fits (with Schwarz's correction for the
+number of parameters) does not prefer one at :data:`TIE_LEVEL`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from scipy import stats
+
+from fmuid.discrepancy.residual_tests import TestResult
+from fmuid.discrepancy.scan import CandidateFit
+
+SCAN_WEIGHT = 0.7
+"""Share of the family-wise level given to the catalogue scan."""
+
+GENERIC_WEIGHT = 0.1
+"""Share given to the generic error-model test."""
+
+AGREEMENT_WEIGHT = 0.1
+"""Share given to the agreement of separate per-experiment fits."""
+
+GROUPS = {
+    "catalogue_scan": SCAN_WEIGHT,
+    "generic_error_model": GENERIC_WEIGHT,
+    "experiments_disagree": AGREEMENT_WEIGHT,
+}
+"""Weight of each test that is not a residual test; the residual tests share the rest."""
+
+TIE_LEVEL = 0.05
+"""Vuong's test must reject at this level for one candidate to be preferred over another."""
+
+EQUAL_PREDICTIONS = 0.02
+"""Fitted predictions whose root-mean-square difference is below this share of sigma are
+equal: together they change chi2 by less than ``n * 0.02**2`` (0.4 for 1000 samples)."""
+
+NULL_DRAWS = 20000
+"""Draws of the Gaussian null of the scan's smallest p-value."""
+
+
+class Scored(Protocol):
+    """A test whose statistic is, to first order, a function of ``directions^T e``."""
+
+    @property
+    def directions(self) -> np.ndarray:
+        """Orthonormal score directions (columns)."""
+
+    @property
+    def one_sided(self) -> bool:
+        """Whether the null is chi-bar-square at a bound (one direction only)."""
+
+    @property
+    def p_value(self) -> float:
+        """The test's own p-value."""
+
+
+def _null_stats(draws: np.ndarray, fits: Sequence[Scored], blocks: list[slice]) -> np.ndarray:
+    """Each candidate's p-value for every null draw (draws x candidates)."""
+    out = np.empty((draws.shape[0], len(fits)))
+    for k, (f, block) in enumerate(zip(fits, blocks)):
+        z = draws[:, block]
+        df = z.shape[1]
+        if df == 0:
+            out[:, k] = 1.0
+        elif f.one_sided and df == 1:
+            t = np.maximum(z[:, 0], 0.0) ** 2
+            out[:, k] = np.where(t > 0, 0.5 * stats.chi2.sf(t, 1), 1.0)
+        else:
+            out[:, k] = stats.chi2.sf(np.sum(z**2, axis=1), df)
+    return out
+
+
+def min_p(fits: Sequence[Scored], seed: int) -> list[float]:
+    """Single-step min-P adjusted p-value of each test (see the module docstring)."""
+    if not fits:
+        return []
+    blocks, start = [], 0
+    for f in fits:
+        blocks.append(slice(start, start + f.directions.shape[1]))
+        start += f.directions.shape[1]
+    u = np.hstack([f.directions for f in fits])
+    gram = u.T @ u
+    w, v = np.linalg.eigh(gram)
+    root = v * np.sqrt(np.clip(w, 0.0, None))
+    rng = np.random.default_rng(seed)
+    draws = rng.standard_normal((NULL_DRAWS, len(w))) @ root.T
+    smallest = np.sort(_null_stats(draws, fits, blocks).min(axis=1))
+    out = []
+    for f in fits:
+        exceed = np.searchsorted(smallest, f.p_value, side="right")
+        monte_carlo = (exceed + 1) / (NULL_DRAWS + 1)
+        out.append(float(min(monte_carlo, len(fits) * f.p_value, 1.0)))
+    return out
+
+
+def weighted_holm(tests: Sequence[tuple[TestResult, float]], alpha: float) -> list[TestResult]:
+    """Return the tests that Holm's weighted step-down procedure rejects at level ``alpha``.
+
+    Parameters
+    ----------
+    tests
+        ``(test, weight)`` pairs, weights > 0 (normalised here).
+    alpha
+        Family-wise level.
+
+    """
+    remaining = [(t, w) for t, w in tests if w > 0]
+    rejected: list[TestResult] = []
+    while remaining:
+        total = sum(w for _, w in remaining)
+        test, weight = min(remaining, key=lambda tw: tw[0].p_value / tw[1])
+        if test.p_value > alpha * weight / total:
+            break
+        rejected.append(test)
+        remaining.remove((test, weight))
+    return sorted(rejected, key=lambda t: t.p_value)
+
+
+def family_weights(tests: Sequence[TestResult]) -> list[tuple[TestResult, float]]:
+    """Weights of the decision family: scan, generic, agreement, residual tests (equal shares)."""
+    residual = [t for t in tests if t.test not in GROUPS]
+    rest = 1.0 - sum(GROUPS.values())
+    return [(t, GROUPS.get(t.test, rest / max(len(residual), 1))) for t in tests]
+
+
+@dataclass(frozen=True)
+class Tie:
+    """A candidate that explains the data as well as the named one.
+
+    Attributes
+    ----------
+    fit
+        The candidate's fit.
+    test
+        ``"equal_predictions"`` or ``"vuong"``.
+    statistic, p_value
+        Vuong's z statistic and its two-sided p-value (0 and 1 for equal predictions).
+    max_difference
+        Largest difference of the two fitted predictions in units of sigma.
+
+    """
+
+    fit: CandidateFit
+    test: str
+    statistic: float
+    p_value: float
+    max_difference: float
+
+    def to_dict(self) -> dict[str, object]:
+        """Return the JSON form."""
+        return {
+            "effect": self.fit.candidate.effect,
+            "parameters": {k: float(v) for k, v in self.fit.values.items()},
+            "chi2": float(self.fit.chi2),
+            "test": self.test,
+            "statistic": float(self.statistic),
+            "p_value": float(self.p_value),
+            "max_difference_sigma": float(self.max_difference),
+        }
+
+
+def vuong(best: CandidateFit, other: CandidateFit) -> tuple[float, float]:
+    """Vuong's z statistic of ``best`` against ``other`` and its two-sided p-value."""
+    n = len(best.residuals)
+    ratio = 0.5 * (other.residuals**2 - best.residuals**2)
+    omega = float(np.std(ratio))
+    correction = 0.5 * (best.problem.n_free - other.problem.n_free) * np.log(n)
+    if omega == 0.0:
+        return 0.0, 1.0
+    z = (float(ratio.sum()) - correction) / (np.sqrt(n) * omega)
+    return float(z), float(2.0 * stats.norm.sf(abs(z)))
+
+
+def ties(best: CandidateFit, others: Sequence[CandidateFit]) -> list[Tie]:
+    """Return the fitted candidates that no test of this data prefers ``best`` to."""
+    out = []
+    for other in others:
+        if other is best or not other.fitted:
+            continue
+        difference = other.residuals - best.residuals
+        gap = float(np.max(np.abs(difference)))
+        if float(np.sqrt(np.mean(difference**2))) < EQUAL_PREDICTIONS:
+            out.append(Tie(other, "equal_predictions", 0.0, 1.0, gap))
+            continue
+        z, p = vuong(best, other)
+        if p >= TIE_LEVEL:
+            out.append(Tie(other, "vuong", z, p, gap))
+    return out
+
+
+def strength(p: float) -> str:
+    """Words for a p-value: how strong the evidence is."""
+    if p < 1e-6:
+        return f"very strong evidence (p = {p:.2g})"
+    if p < 1e-3:
+        return f"strong evidence (p = {p:.2g})"
+    if p < 0.01:
+        return f"evidence (p = {p:.2g})"
+    return f"weak evidence (p = {p:.2g})"

@@ -1,0 +1,400 @@
+"""Diagnose a model mismatch in small steps: locate, scan, decide, refine, profile, explain.
+
+1. **Locate** (:mod:`.locate`): fit the base model, test its weighted residuals and whether
+   separate per-experiment fits disagree.
+2. **Scan** (:mod:`.scan`): score every catalogue candidate (:mod:`.catalogue`) by its
+   likelihood-ratio statistic against the base fit; the scan always runs, because a concealed
+   effect leaves the residuals looking like noise. The base fit is re-checked from the best
+   candidate's base parameters (a lower base optimum would otherwise pass for an effect).
+3. **Decide** (:mod:`.decide`): one weighted Holm family at the false-alarm level fixed in
+   advance (1 %) over the scan (min-P over the candidates, boundary-aware nulls), the
+   agreement test and the residual tests. A candidate is named when it is significant after the
+   scan's adjustment and the augmented model's residuals pass; candidates that explain the
+   data equally well are listed (Vuong's test, or equal predictions).
+4. **Refine**: if residual tests still fail, the other candidates are scanned on top of the
+   first (and the first dropped if the second alone does as well); otherwise the mismatch is
+   ``unexplained`` and a generic correction (:mod:`.correction`) describes it.
+5. **Profile**: the added parameters' intervals, and the original parameters' intervals and
+   labels before and after the augmentation (:mod:`.absorb`); on a tie, the test like the
+   data's that would settle it (:mod:`.settle`).
+6. **Explain** (:mod:`.explain`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from fmuid.discrepancy import decide, explain, locate
+from fmuid.discrepancy import residual_tests as rt
+from fmuid.discrepancy.absorb import absorbed
+from fmuid.discrepancy.catalogue import Candidate, study_catalogue
+from fmuid.discrepancy.correction import arx_correction
+from fmuid.discrepancy.generic import generic_test
+from fmuid.discrepancy.knowledge import AddedParameter
+from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis
+from fmuid.discrepancy.scan import CandidateFit, Scanner, augmented, scan, sensitivity_basis
+from fmuid.discrepancy.settle import settles, settling_tests
+from fmuid.estimation.optimize import (
+    FitOptions,
+    fit_problem,
+    jacobian,
+    make_fit_result,
+    refine,
+    safe_residuals,
+)
+from fmuid.estimation.problem import Problem
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.profiling.engine import profile_problem
+from fmuid.profiling.walk import WalkOptions
+from fmuid.progress import Progress, ProgressCallback
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class DiagnoseOptions:
+    """Settings of a diagnosis.
+
+    Attributes
+    ----------
+    alpha
+        Family-wise false-alarm level of the mismatch decision and of naming an effect.
+    ci_confidence
+        Level of the pointwise profile-likelihood interval of the added parameters.
+    screen_level
+        Candidates whose linearised screen p-value is below this are fitted in full.
+    min_fits
+        At least this many of the strongest candidates are fitted in full.
+    fit
+        Trust-region settings of a candidate's full fit.
+    agreement_nfev
+        Cap on residual evaluations of each single-experiment fit of the agreement test.
+    absorbed
+        Re-profile the original parameters before and after the augmentation.
+    discriminate
+        On a tie, search the tests like the data's for one that would settle it.
+    workers
+        Processes for the profile branches (1: in this process).
+    walk
+        Profile walk settings: the walk stops at the simultaneous threshold, past the
+        pointwise crossing that gives the intervals.
+
+    """
+
+    alpha: float = rt.FALSE_ALARM
+    ci_confidence: float = 0.95
+    screen_level: float = 0.05
+    min_fits: int = 2
+    fit: FitOptions = FitOptions(ftol=1e-9, xtol=1e-9, gtol=1e-9, max_nfev=60)
+    agreement_nfev: int = 20
+    absorbed: bool = True
+    discriminate: bool = True
+    workers: int = 1
+    walk: WalkOptions = WalkOptions(  # noqa: B008 (frozen value)
+        rise_per_step=0.15,
+        margin=0.0,
+        max_points=12,
+        refit=FitOptions(ftol=1e-7, xtol=1e-7, gtol=1e-7, max_nfev=20),
+    )
+
+
+def _fit_of(problem: Problem, z: np.ndarray, chi2: float, t0: float) -> FitResult:
+    return make_fit_result(problem, z, chi2, jacobian(problem, z), "", False, t0, 0)
+
+
+def _score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
+    return CandidateScore(
+        f.candidate.effect, f.values, f.chi2, f.p_value, f.bic, f.stage, f.statistic,
+        p_adjusted, f.fitted,
+    )  # fmt: skip
+
+
+def _added_estimate(
+    value: float, p: AddedParameter, ci: tuple[float | None, float | None], confidence: float
+) -> AddedEstimate:
+    """Estimate, interval and the off-value check of one added parameter."""
+    lo, hi = ci
+    if p.off_side == "low":
+        excludes = lo is not None
+    elif p.off_side == "high":
+        excludes = hi is not None
+    else:
+        low = lo if lo is not None else p.spec.lower
+        high = hi if hi is not None else p.spec.upper
+        excludes = not low <= p.off <= high
+    return AddedEstimate(value, ci, confidence, p.unit, p.off, bool(excludes))
+
+
+class _Run:
+    """State of one diagnosis: the problem, options, progress and the simulations spent."""
+
+    def __init__(self, problem: Problem, opts: DiagnoseOptions, progress: ProgressCallback | None):
+        self.problem = problem
+        self.opts = opts
+        self.progress = progress
+        self.t0 = time.perf_counter()
+        self.sims0 = problem.simulations
+        self.made: dict[int, Problem] = {}
+        self.extra = 0
+        self.done = 0
+        self.total = 1
+
+    def spent(self) -> int:
+        made = sum(p.simulations for p in self.made.values())
+        return self.problem.simulations - self.sims0 + made + self.extra
+
+    def report(self, detail: str) -> None:
+        self.done += 1
+        if self.progress:
+            self.progress(Progress("diagnose", self.done, max(self.total, self.done), detail))
+
+    def scan_round(
+        self, scanner: Scanner, pool: list[Candidate], stage: int
+    ) -> tuple[list[CandidateFit], list[float]]:
+        def seen(f: CandidateFit) -> None:
+            self.made[id(f.problem)] = f.problem
+            self.report(f"round {stage}: {f.candidate.label} chi2 {f.chi2:.4g}")
+
+        fits = scan(
+            scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
+            options=self.opts.fit, stage=stage, on_candidate=seen,
+        )  # fmt: skip
+        return fits, decide.min_p(fits, self.problem.spec.seed + stage)
+
+    def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
+        """Count a profile: its problem's simulations, and those of worker processes."""
+        self.made[id(problem)] = problem
+        if self.opts.workers != 1:
+            self.extra += spent_elsewhere
+
+    def cost(self) -> Cost:
+        return Cost(self.spent(), time.perf_counter() - self.t0)
+
+
+def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
+    """Profile-likelihood intervals of an equally good candidate's added parameters."""
+    tie_fit = _fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
+    prof = profile_problem(
+        tie.problem,
+        tie_fit,
+        only=list(tie.candidate.names),
+        workers=run.opts.workers,
+        options=run.opts.walk,
+    )
+    run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
+    return {
+        p.name: _added_estimate(
+            prof.fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise,
+            run.opts.ci_confidence,
+        ).to_dict()
+        for p in tie.candidate.parameters
+    }  # fmt: skip
+
+
+def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestResult]:
+    """Residual tests of an augmented fit and the generic error-model test on top of it."""
+    tests = locate.residual_tests(problem, fit)
+    residuals = safe_residuals(problem, fit.z_estimate())
+    generic, _ = generic_test(problem, residuals, sensitivity_basis(fit.jacobian), seed)
+    return [*tests, generic] if generic else tests
+
+
+def _recheck_base(run: _Run, fit: FitResult, best: CandidateFit) -> FitResult | None:
+    """Re-fit the base model from the best candidate's base parameters; a lower chi2 wins."""
+    names = run.problem.names
+    start = run.problem.to_z({n: best.problem.from_z(best.z)[n] for n in names})
+    z, chi2, _ = refine(run.problem, start, options=run.opts.fit)
+    if chi2 < fit.chi2 - 1e-6 * max(1.0, fit.chi2):
+        log.info("base fit improved from %.6g to %.6g by a candidate's start", fit.chi2, chi2)
+        return _fit_of(run.problem, z, chi2, time.perf_counter())
+    return None
+
+
+def _scan_base(
+    run: _Run, fit: FitResult, cands: list[Candidate]
+) -> tuple[FitResult, Scanner, list[CandidateFit], list[float]]:
+    """Scan the catalogue on the base fit (once more if a candidate revealed a better base)."""
+    for _ in range(2):
+        scanner = Scanner(run.problem, fit.z_estimate(), fit.jacobian, run.opts.ci_confidence)
+        fits, adjusted = run.scan_round(scanner, cands, 1)
+        best = fits[0]
+        if not best.fitted or best.p_value >= run.opts.screen_level:
+            break
+        better = _recheck_base(run, fit, best)
+        if better is None:
+            break
+        fit = better
+    return fit, scanner, fits, adjusted
+
+
+def diagnose_problem(
+    problem: Problem,
+    *,
+    fit: FitResult | None = None,
+    options: DiagnoseOptions = DiagnoseOptions(),
+    progress: ProgressCallback | None = None,
+) -> Diagnosis:
+    """Diagnose the model mismatch of an estimation problem (see the module docstring).
+
+    Parameters
+    ----------
+    problem
+        The base study (its predictor must be the plain FMU predictor).
+    fit
+        Its best fit; by default fitted here (``spec.global_search``, ``spec.seed``).
+    options
+        Levels and effort.
+    progress
+        Receives ``Progress("diagnose", done, total, detail)`` after every stage.
+
+    Returns
+    -------
+    Diagnosis
+
+    """
+    opts = options
+    run = _Run(problem, opts, progress)
+    if fit is None:
+        fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)
+    cands = study_catalogue(problem)
+    run.total = 2 * len(cands) + 4
+    # 1-2. locate and scan
+    fit, scanner, fits, adjusted = _scan_base(run, fit, cands)
+    tests_before = locate.residual_tests(problem, fit)
+    agreement = locate.experiments_disagree(problem, fit, opts.agreement_nfev)
+    generic, pole = generic_test(problem, scanner.r0, scanner.basis, problem.spec.seed)
+    run.report("residual tests, the experiments' agreement and the generic error model")
+    k_best = int(np.argmin(adjusted))
+    scan_test = rt.TestResult(
+        "catalogue_scan", None, None, adjusted[k_best], fits[k_best].statistic, None
+    )
+    family = [*tests_before, *(t for t in (agreement, generic) if t), scan_test]
+    # 3. decide
+    evidence = decide.weighted_holm(decide.family_weights(family), opts.alpha)
+    where, found = locate.location(problem, fit, [t for t in evidence if t.output])
+    bic_before = fit.chi2 + problem.n_free * float(np.log(fit.n_data))
+    scores = [_score(f, a) for f, a in zip(fits, adjusted)]
+    common: dict[str, Any] = {
+        "false_alarm": opts.alpha, "tests_before": tuple(family), "location": where,
+        "windows": tuple(found), "evidence": tuple(evidence), "chi2_before": fit.chi2,
+        "n_data": fit.n_data, "bic_before": bic_before,
+        "parameters_before": dict(fit.estimates),
+        "fmu": {"sha256": fit.fmu_sha256, "model_name": fit.model_name},
+        "scan_p_value": scan_test.p_value,
+        "units": dict(fit.units),
+    }  # fmt: skip
+    if not evidence:
+        return Diagnosis(
+            mismatch=False, tests_after=tuple(tests_before), effect=None,
+            description=explain.no_mismatch(opts.alpha, scan_test.p_value),
+            candidates=tuple(scores), added_parameters={}, chi2_after=fit.chi2,
+            lrt_p_value=None, bic_after=bic_before, parameters_after=dict(fit.estimates),
+            cost=run.cost(), **common,
+        )  # fmt: skip
+    # 4. refine: the best significant candidate, then a second one if residuals still fail
+    best = fits[0]
+    significant = adjusted[0] <= opts.alpha
+    if not best.fitted:
+        best = scanner.fit(best, opts.fit)
+    aug, z = best.problem, best.z
+    final_fit = _fit_of(aug, z, best.chi2, run.t0)
+    seed_after = problem.spec.seed + 1
+    tests_after = _tests_after(aug, final_fit, seed_after)
+    applied = [best.candidate]
+    second: str | None = None
+    if significant and rt.holm(tests_after, opts.alpha):
+        pool = [c for c in cands if c is not best.candidate]
+        on_top = Scanner(aug, z, final_fit.jacobian, opts.ci_confidence)
+        fits2, adjusted2 = run.scan_round(on_top, pool, 2)
+        scores += [_score(f, a) for f, a in zip(fits2, adjusted2)]
+        top = fits2[0] if fits2[0].fitted else on_top.fit(fits2[0], opts.fit)
+        if adjusted2[0] <= opts.alpha:
+            alone = next(f for f in fits if f.candidate is top.candidate)
+            alone = alone if alone.fitted else scanner.fit(alone, opts.fit)
+            drop = max(alone.chi2 - top.chi2, 0.0)
+            if stats.chi2.sf(drop, len(best.candidate.names)) >= opts.alpha:
+                best, applied, aug, z = alone, [top.candidate], alone.problem, alone.z
+                final_fit = _fit_of(aug, z, alone.chi2, run.t0)
+            else:
+                applied, aug, z, second = (
+                    [best.candidate, top.candidate],
+                    top.problem,
+                    top.z,
+                    (top.candidate.effect),
+                )
+                final_fit = _fit_of(aug, z, top.chi2, run.t0)
+            tests_after = _tests_after(aug, final_fit, seed_after)
+    run.report("tests of the augmented model")
+    explained = significant and not rt.holm(tests_after, opts.alpha)
+    if not explained:
+        correction = arx_correction(locate.residual_series(problem, fit.estimates))
+        if generic is not None and pole is not None:
+            correction["input_error_model"] = {
+                "model": f"Laguerre filters of each input (pole {pole.pole_hz:.3g} Hz) per output",
+                "pole_hz": pole.pole_hz, "chi2_drop": generic.statistic, "df": generic.df,
+                "p_value": generic.p_value,
+            }  # fmt: skip
+        run.report("generic correction")
+        worst = min(tests_after, key=lambda t: t.p_value) if tests_after else None
+        return Diagnosis(
+            mismatch=True, tests_after=tuple(tests_after), effect="unexplained",
+            description=explain.unexplained(scores[0], worst, correction, where),
+            candidates=tuple(scores), added_parameters={}, chi2_after=fit.chi2,
+            lrt_p_value=scores[0].p_value, bic_after=bic_before,
+            parameters_after=dict(fit.estimates), generic_correction=correction,
+            cost=run.cost(), **common,
+        )  # fmt: skip
+    # 5. profile the added parameters, then the original ones before and after
+    added = [p for c in applied for p in c.parameters]
+    prof = profile_problem(
+        aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk
+    )
+    run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
+    final_fit = prof.fit
+    estimates = {
+        p.name: _added_estimate(
+            final_fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise,
+            opts.ci_confidence,
+        )
+        for p in added
+    }  # fmt: skip
+    run.report("profiles of the added parameters")
+    absorbed_by: dict[str, object] = {}
+    if opts.absorbed:
+        at_study = augmented(problem, applied, problem.spec.confidence)
+        absorbed_by, sims = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
+        run.profiled(at_study, sims)
+        run.report("profiles of the original parameters before and after")
+    common["location"] = locate.effect_location(
+        locate.residual_series(problem, fit.estimates),
+        locate.residual_series(aug, final_fit.estimates),
+    )
+    rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
+    ties = decide.ties(best, rivals) if len(applied) == 1 else []
+    tied = [{**t.to_dict(), "intervals": _tie_intervals(run, t.fit)} for t in ties]
+    tests = settling_tests(problem, best, ties) if opts.discriminate else []
+    for entry, test in zip(tied, tests):
+        entry["expected_separation"] = round(test.expected_chi2, 4)
+    proposal = max(filter(settles, tests), key=lambda d: d.expected_chi2, default=None)
+    if tests:
+        run.report("tests that would settle the ties")
+    lrt = float(stats.chi2.sf(max(fit.chi2 - final_fit.chi2, 0.0), len(added)))
+    concealed = not rt.holm(tests_before, opts.alpha)
+    return Diagnosis(
+        mismatch=True, tests_after=tuple(tests_after), effect=best.candidate.effect,
+        description=explain.explained(
+            applied, estimates, fit.chi2, final_fit.chi2, lrt, ties, concealed
+        ) + explain.settle(tests),
+        candidates=tuple(scores), added_parameters=estimates, chi2_after=final_fit.chi2,
+        lrt_p_value=lrt, bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
+        parameters_after=dict(final_fit.estimates), second_effect=second,
+        indistinguishable=tuple(tied), absorbed=absorbed_by,
+        discriminating_experiment=proposal.to_dict() if proposal else None,
+        cost=run.cost(), **common,
+    )  # fmt: skip

@@ -1,0 +1,125 @@
+"""Explain: the sentences of a diagnosis, worded by the statistics behind them."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from scipy import stats
+
+from fmuid.discrepancy.catalogue import Candidate
+from fmuid.discrepancy.decide import Tie, strength
+from fmuid.discrepancy.residual_tests import TestResult
+from fmuid.discrepancy.result import AddedEstimate
+from fmuid.discrepancy.settle import settles
+from fmuid.experiment_design.discriminate import Discrimination
+
+
+def _fmt_ci(e: AddedEstimate) -> str:
+    lo = "-inf" if e.ci[0] is None else f"{e.ci[0]:.3g}"
+    hi = "inf" if e.ci[1] is None else f"{e.ci[1]:.3g}"
+    verdict = "excludes" if e.excludes_off else "does not exclude"
+    return f"{e.confidence:.0%} CI [{lo}, {hi}] {verdict} the off value {e.off:g}"
+
+
+def no_mismatch(alpha: float, scan_p: float | None) -> str:
+    """Verdict when no test of the family rejects."""
+    scan = "" if scan_p is None else f" (best candidate, adjusted for the scan: p = {scan_p:.2g})"
+    return (
+        "No mismatch: neither the residual tests, nor the agreement of the experiments, nor the "
+        f"generic input-driven error model, nor any candidate of the catalogue{scan} rejects the "
+        f"model at a family-wise false-alarm level of {alpha:g}."
+    )
+
+
+def explained(
+    applied: Sequence[Candidate],
+    estimates: dict[str, AddedEstimate],
+    chi2_before: float,
+    chi2_after: float,
+    lrt: float,
+    ties: Sequence[Tie],
+    concealed: bool,
+) -> str:
+    """Verdict and summary of a named effect."""
+    parts = []
+    for c in applied:
+        e = estimates[c.parameters[0].name]
+        text = c.description.format(value=f"{e.estimate:.3g}")
+        parts.append(f"{c.effect}: {text} ({c.parameters[0].name} {_fmt_ci(e)})")
+    out = "; then ".join(parts)
+    out = out[0].upper() + out[1:]
+    out += (
+        f". Chi2 {chi2_before:.4g} -> {chi2_after:.4g}: {strength(lrt)} from the likelihood-ratio "
+        "test; the augmented model's residuals pass every test."
+    )
+    if concealed:
+        out += (
+            " The base model's residuals looked like noise: the fit had moved its parameters to "
+            "hide the effect."
+        )
+    if ties:
+        names = ", ".join(
+            f"{t.fit.candidate.effect} ({'equal predictions' if t.test == 'equal_predictions' else f'Vuong p = {t.p_value:.2g}'})"  # noqa: E501
+            for t in ties
+        )
+        out += f" Equally good explanations that this data cannot tell apart: {names}."
+    return out
+
+
+def settle(tests: Sequence[Discrimination]) -> str:
+    """Sentences on the tests that would settle the ties, or on why none in reach can."""
+    out = ""
+    for found in tests:
+        a, b = found.hypotheses
+        lam = found.expected_chi2
+        if settles(found):
+            out += (
+                f" A test would tell {a} from {b}: {found.trial.label}, measuring "
+                f"{', '.join(found.trial.outputs)}, separates them by an expected chi2 of "
+                f"{lam:.3g} ({strength(float(stats.chi2.sf(lam, 1)))} expected)."
+            )
+        else:
+            out += (
+                f" No step, chirp or multisine like this data's (its input amplitude, length, "
+                f"rate and outputs) tells {a} from {b}: the largest expected chi2 separation "
+                f"is {lam:.3g}{'' if found.confirmed else ' (linearised)'}."
+            )
+    return out
+
+
+def unexplained(
+    best: Any, worst: TestResult | None, correction: dict[str, Any], where: dict[str, Any]
+) -> str:
+    """Verdict when no catalogue entry removes a mismatch."""
+    outputs = where.get("outputs")
+    place = ", ".join(map(str, outputs)) if isinstance(outputs, list) and outputs else "the outputs"
+    out = f"Mismatch in {place} that no catalogue entry removes"
+    if best is not None:
+        out += f": the best candidate, {best.effect} ({strength(best.p_value)})"
+        out += f", still leaves {worst.test} at p = {worst.p_value:.2g}" if worst else ""
+    out += (
+        f". A generic {correction['model']} reduces chi2 from {correction['chi2_before']:.4g} "
+        f"to {correction['chi2_after']:.4g} (noise alone would leave about "
+        f"{correction['noise_chi2']:.4g}"
+    )
+    share = correction.get("structure_fraction")
+    out += f"; {share:.0%} of the misfit above noise is structure)." if share is not None else ")."
+    model = correction.get("input_error_model")
+    if model:
+        out += (
+            f" An error model driven by the inputs ({model['model']}) lowers chi2 by "
+            f"{model['chi2_drop']:.3g} with {model['df']} coefficients where no move of the "
+            f"model's parameters can ({strength(model['p_value'])})."
+        )
+    dynamics = correction.get("dynamics") or {}
+    mode = dynamics.get("mode")
+    if mode:
+        out += (
+            f" The residuals carry a mode near {mode['frequency_hz']:.3g} Hz "
+            f"(damping ratio {mode['damping']:.2g})."
+        )
+    lead = dynamics.get("leads")
+    if lead:
+        out += f" {lead['output']} leads {lead['other']} by {lead['seconds']:.3g} s."
+    return out

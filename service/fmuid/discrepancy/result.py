@@ -1,0 +1,225 @@
+"""The result of a diagnosis (contract: "Diagnose result")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from fmuid.discrepancy.residual_tests import TestResult, Window
+from fmuid.estimation.result import Cost
+
+
+@dataclass(frozen=True)
+class CandidateScore:
+    """How well one candidate explains the data.
+
+    Attributes
+    ----------
+    effect
+        Catalogue name.
+    parameters
+        Added parameter names and their fitted values.
+    chi2
+        Chi2 of the augmented fit.
+    p_value
+        Likelihood-ratio test against the model it augments: the chi2 drop (``statistic``)
+        against chi-bar-square (off value at a bound) or chi2 (df = added parameters).
+    bic
+        ``chi2 + k ln(n)`` of the augmented model (k free parameters, n data).
+    stage
+        1 for the first round, 2 for the second (on top of the first effect).
+    statistic
+        The chi2 drop.
+    p_adjusted
+        ``p_value`` adjusted for the scan over every candidate of the round (min-P).
+    fitted
+        Whether every parameter was fitted (else the linearised screen's value).
+
+    """
+
+    effect: str
+    parameters: dict[str, float]
+    chi2: float
+    p_value: float
+    bic: float
+    stage: int = 1
+    statistic: float = 0.0
+    p_adjusted: float = 1.0
+    fitted: bool = True
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form."""
+        return {
+            "effect": self.effect,
+            "parameters": {k: float(v) for k, v in self.parameters.items()},
+            "chi2": float(self.chi2),
+            "p_value": float(self.p_value),
+            "bic": float(self.bic),
+            "stage": self.stage,
+            "statistic": float(self.statistic),
+            "p_adjusted": float(self.p_adjusted),
+            "fitted": self.fitted,
+        }
+
+
+@dataclass(frozen=True)
+class AddedEstimate:
+    """Estimate and profile-likelihood interval of an added parameter.
+
+    Attributes
+    ----------
+    estimate
+        Best-fit value.
+    ci
+        Pointwise profile-likelihood interval at ``confidence``; an end is ``None`` when the
+        profile does not cross the threshold inside the bounds.
+    confidence
+        Level of ``ci``.
+    unit, off
+        Unit and the value that switches the effect off.
+    excludes_off
+        Whether ``ci`` rules the off value out.
+
+    """
+
+    estimate: float
+    ci: tuple[float | None, float | None]
+    confidence: float
+    unit: str
+    off: float
+    excludes_off: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form."""
+        return {
+            "estimate": float(self.estimate),
+            "ci": [None if v is None else float(v) for v in self.ci],
+            "confidence": self.confidence,
+            "unit": self.unit,
+            "off": float(self.off),
+            "excludes_off": self.excludes_off,
+        }
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Outcome of ``fmuid.diagnose``: is there a mismatch, where, what explains it.
+
+    ``to_dict`` gives the contract's JSON plus the extra keys documented there.
+    """
+
+    mismatch: bool
+    false_alarm: float
+    evidence: tuple[TestResult, ...]
+    tests_before: tuple[TestResult, ...]
+    tests_after: tuple[TestResult, ...]
+    location: dict[str, Any]
+    windows: tuple[Window, ...]
+    effect: str | None
+    description: str
+    candidates: tuple[CandidateScore, ...]
+    added_parameters: dict[str, AddedEstimate]
+    chi2_before: float
+    chi2_after: float
+    n_data: int
+    lrt_p_value: float | None
+    bic_before: float
+    bic_after: float
+    parameters_before: dict[str, float]
+    parameters_after: dict[str, float]
+    second_effect: str | None = None
+    indistinguishable: tuple[dict[str, Any], ...] = ()
+    generic_correction: dict[str, Any] | None = None
+    absorbed: dict[str, Any] = field(default_factory=dict)
+    scan_p_value: float | None = None
+    fmu: dict[str, str] = field(default_factory=dict)
+    cost: Cost = Cost(0, 0.0)
+    units: dict[str, str] = field(default_factory=dict)
+    discriminating_experiment: dict[str, Any] | None = None
+
+    def whiteness(self, after: bool) -> dict[str, float]:
+        """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""
+        tests = self.tests_after if after else self.tests_before
+        return {
+            f"{t.experiment}/{t.output}": float(t.p_value)
+            for t in tests
+            if t.test == "residual_whiteness"
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the contract (plus extra keys)."""
+        params = {
+            name: {"before": self.parameters_before.get(name), "after": value}
+            for name, value in self.parameters_after.items()
+        }
+        for name, value in self.parameters_before.items():
+            params.setdefault(name, {"before": value, "after": None})
+        out = {
+            "mismatch": self.mismatch,
+            "evidence": [t.to_dict() for t in self.evidence],
+            "location": self.location,
+            "effect": self.effect,
+            "description": self.description,
+            "candidates": [c.to_dict() for c in self.candidates],
+            "added_parameters": {k: v.to_dict() for k, v in self.added_parameters.items()},
+            "chi2_before": float(self.chi2_before),
+            "chi2_after": float(self.chi2_after),
+            "parameters": params,
+            "fmu": dict(self.fmu),
+            "n_data": self.n_data,
+            "false_alarm": self.false_alarm,
+            "second_effect": self.second_effect,
+            "indistinguishable": list(self.indistinguishable),
+            "absorbed": self.absorbed,
+            "scan_p_value": None if self.scan_p_value is None else float(self.scan_p_value),
+            "lrt_p_value": None if self.lrt_p_value is None else float(self.lrt_p_value),
+            "bic_before": float(self.bic_before),
+            "bic_after": float(self.bic_after),
+            "whiteness_before": self.whiteness(after=False),
+            "whiteness_after": self.whiteness(after=True),
+            "windows": [w.to_dict() for w in self.windows],
+            "tests_before": [t.to_dict() for t in self.tests_before],
+            "tests_after": [t.to_dict() for t in self.tests_after],
+            "generic_correction": self.generic_correction,
+            "cost": self.cost.to_dict(),
+            "units": dict(self.units),
+            "discriminating_experiment": self.discriminating_experiment,
+        }
+        return {"verdict": verdict(out), **out}
+
+    def to_frame(self) -> Any:
+        """Return a pandas table of the parameters before and after, and the added ones."""
+        from fmuid.results import to_frame
+
+        return to_frame(self)
+
+
+def verdict(d: dict[str, Any]) -> str:
+    """One sentence from a diagnosis' JSON: mismatch or not, what explains it, how strongly."""
+    level = d.get("false_alarm", 0.01)
+    if not d.get("mismatch"):
+        return f"No mismatch: no test rejects the model at a family-wise level of {level:g}."
+    effect = d.get("effect")
+    if effect in (None, "unexplained"):
+        outputs = ", ".join((d.get("location") or {}).get("outputs") or []) or "the outputs"
+        hidden = all(
+            e.get("test") in ("generic_error_model", "catalogue_scan", "experiments_disagree")
+            for e in d.get("evidence") or []
+        )
+        note = ", although the base model's residuals look like noise" if hidden else ""
+        return f"A mismatch in {outputs} that no catalogue entry explains{note}."
+    p = d.get("lrt_p_value")
+    words = "evidence" if p is None else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else
+                                          "moderate") + f" evidence (p = {p:.2g})"  # fmt: skip
+    evidence = d.get("evidence") or []
+    hidden = bool(evidence) and all(
+        e.get("test") in ("catalogue_scan", "generic_error_model", "experiments_disagree")
+        for e in evidence
+    )
+    out = f"{effect} explains the mismatch, with {words}"
+    if hidden:
+        out += ", although the base model's residuals look like noise"
+    ties = [t["effect"] if isinstance(t, dict) else str(t) for t in d.get("indistinguishable", [])]
+    if ties:
+        out += f"; {', '.join(ties)} explain{'s' if len(ties) == 1 else ''} it equally well"
+    return out + "."

@@ -1,0 +1,90 @@
+"""Settle a tie: the feasible test that best tells the named effect from an equally good one.
+
+When the data cannot tell two candidates apart, each fitted candidate becomes a hypothesis of
+:mod:`fmuid.experiment_design.discriminate` (its augmented parameters, its fitted values, its
+wrappers) and the tests of :func:`fmuid.experiment_design.discriminate.default_space` (steps, chirps
+and multisines like the study's data: its input amplitude, longest record, rate and noise) are
+searched for the one whose expected likelihood-ratio statistic between the two is largest.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from scipy import stats
+
+from fmuid.discrepancy.decide import Tie
+from fmuid.discrepancy.scan import CandidateFit
+from fmuid.estimation.problem import Problem
+from fmuid.estimation.wrappers import AugmentedPredictor
+from fmuid.experiment_design.discriminate import (
+    Discrimination,
+    Hypothesis,
+    default_space,
+    discriminating_experiment,
+)
+
+SETTLES = 1e-3
+"""A proposed test settles a tie when its expected likelihood-ratio statistic (1 df) has a
+p-value below this level."""
+
+MAX_TIES = 2
+"""Ties searched (the strongest first); each search is a screen plus a few full fits."""
+
+CONFIRM_BELOW = 4.0
+"""The screen's best tests are confirmed by full fits only when the linearised separation is
+at least the settling level's chi2 (10.8) over this factor: a linearised estimate four times
+too small to settle the tie does not pay for the full fits."""
+
+CANDIDATES = 2
+"""Tests sampled per input family (step, chirp, multisine) for each tie: the screen's cost
+(about 2 (n + 2) simulations per test) stays a fraction of the diagnosis."""
+
+
+def hypothesis(fit: CandidateFit) -> Hypothesis:
+    """Return a fitted candidate as a hypothesis: its parameters, fitted values and wrappers."""
+    problem = fit.problem
+    predictor = problem.predictor
+    wrappers = predictor.wrappers if isinstance(predictor, AugmentedPredictor) else {}
+    return Hypothesis(
+        name=fit.candidate.effect,
+        parameters=dict(problem.parameter_specs),
+        values=problem.from_z(fit.z),
+        wrappers=dict(wrappers),
+    )
+
+
+def settling_tests(
+    problem: Problem, named: CandidateFit, ties: Sequence[Tie]
+) -> list[Discrimination]:
+    """Return, per tie (the first :data:`MAX_TIES`), the test that best separates it.
+
+    Parameters
+    ----------
+    problem
+        The base study (its data set the space of tests).
+    named
+        The named candidate's fit.
+    ties
+        Candidates the data cannot tell from it, strongest first.
+
+    Returns
+    -------
+    list of Discrimination
+        One per tie searched, in the order of ``ties``.
+
+    """
+    space = default_space(problem).model_copy(update={"candidates": CANDIDATES})
+    a = hypothesis(named)
+    floor = float(stats.chi2.isf(SETTLES, 1)) / CONFIRM_BELOW
+    return [
+        discriminating_experiment(
+            problem.fmu_path, problem.spec, space, a, hypothesis(t.fit), confirm_from=floor
+        )
+        for t in ties[:MAX_TIES]
+    ]
+
+
+def settles(found: Discrimination) -> bool:
+    """Whether the expected likelihood-ratio statistic is significant at :data:`SETTLES`."""
+    return float(stats.chi2.sf(found.expected_chi2, 1)) < SETTLES

@@ -1,0 +1,154 @@
+"""Design evaluations side by side: in this process, local worker processes or a dask cluster.
+
+The executors are those of the profile engine (:mod:`fmuid.profiling.parallel`): a ``forkserver``
+process pool whose workers die with its owner, or a ``dask.distributed.Client`` whose workers
+get the FMU's bytes with each task. One evaluation is one task; each finished one is handed to
+the caller in this process (to checkpoint it and report progress) as soon as it is back.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any, TypeVar
+
+from fmuid.model.fmu import FmuModel
+from fmuid.model.simulator import get_simulator, mark_reset_unreliable
+from fmuid.profiling.parallel import use_fmu_here
+from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def run_evaluations(
+    evaluate: Callable[[T], R],
+    tasks: Sequence[T],
+    model: FmuModel,
+    interface: str,
+    *,
+    workers: int | None = 1,
+    executor: Any = None,
+    on_done: Callable[[int, R], None] | None = None,
+) -> list[R]:
+    """Evaluate every task and return the results in the order of ``tasks``.
+
+    Parameters
+    ----------
+    evaluate
+        A picklable function of one task (a module-level function or a bound method of a
+        picklable object); it must not depend on the process it runs in, so that every executor
+        gives the same numbers.
+    tasks
+        The evaluations.
+    model, interface
+        The FMU the evaluations simulate and its FMI interface.
+    workers
+        Local worker processes (``None``: the CPU count), at most one per task; 1 evaluates in
+        this process.
+    executor
+        A ``dask.distributed.Client``; overrides ``workers``.
+    on_done
+        Called in this process with ``(index in tasks, result)`` for each finished evaluation.
+        If it raises, the evaluations not started are cancelled and the error propagates.
+
+    """
+    if not tasks:
+        return []
+    results: dict[int, R] = {}
+
+    def finished(k: int, result: R) -> None:
+        results[k] = result
+        if on_done is not None:
+            on_done(k, result)
+
+    unreliable = get_simulator(model.path, interface).reset_reliable is False
+    if executor is not None:
+        _run_dask(evaluate, tasks, model, interface, unreliable, executor, finished)
+    elif min(workers or os.cpu_count() or 1, len(tasks)) <= 1:
+        for k, task in enumerate(tasks):
+            finished(k, evaluate(task))
+    else:
+        n = min(workers or os.cpu_count() or 1, len(tasks))
+        _run_pool(evaluate, tasks, model, interface, unreliable, n, finished)
+    return [results[k] for k in range(len(tasks))]
+
+
+def _init_worker(owner: int, path: Path, interface: str, unreliable: bool) -> None:
+    """Die with the pool's owner; know its verdict on the FMU's reset (not inherited)."""
+    die_with_pool_owner(owner)
+    if unreliable:
+        mark_reset_unreliable(path, interface)
+
+
+def _run_pool(
+    evaluate: Callable[[T], R],
+    tasks: Sequence[T],
+    model: FmuModel,
+    interface: str,
+    unreliable: bool,
+    n: int,
+    finished: Callable[[int, R], None],
+) -> None:
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["fmuid.profiling.forkserver_guard", __name__])
+    os.environ[POOL_PARENT_ENV] = str(os.getpid())
+    pool = ProcessPoolExecutor(
+        n,
+        mp_context=ctx,
+        initializer=_init_worker,
+        initargs=(os.getpid(), model.path, interface, unreliable),
+    )
+    try:
+        futures: dict[Future[R], int] = {pool.submit(evaluate, t): k for k, t in enumerate(tasks)}
+        for future in as_completed(futures):
+            finished(futures[future], future.result())
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _run_dask(
+    evaluate: Callable[[T], R],
+    tasks: Sequence[T],
+    model: FmuModel,
+    interface: str,
+    unreliable: bool,
+    client: Any,
+    finished: Callable[[int, R], None],
+) -> None:
+    from distributed import as_completed as dask_completed
+
+    # the FMU's bytes travel with each task (see fmuid.profiling.parallel._run_dask)
+    blob = Path(model.path).read_bytes()
+    futures = [
+        client.submit(
+            evaluate_anywhere, evaluate, t, model.path, model.sha256, blob, interface, unreliable,
+            pure=False,
+        )
+        for t in tasks
+    ]  # fmt: skip
+    index = {f.key: k for k, f in enumerate(futures)}
+    try:
+        for future in dask_completed(futures):
+            finished(index[future.key], future.result())
+    finally:
+        client.cancel([f for f in futures if not f.done()])
+
+
+def evaluate_anywhere(
+    evaluate: Callable[[T], R],
+    task: T,
+    path: Path,
+    sha256: str,
+    fmu_bytes: bytes,
+    interface: str,
+    reset_unreliable: bool,
+) -> R:
+    """Evaluate a task on a worker that may not see the FMU file (a dask task)."""
+    use_fmu_here(path, sha256, fmu_bytes)
+    if reset_unreliable:
+        mark_reset_unreliable(path, interface)
+    return evaluate(task)

@@ -1,0 +1,254 @@
+"""One branch settled: walk, exact ends, right-valley checks and re-walks from a lower valley."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fmuid.estimation.problem import Problem
+from fmuid.profiling.checks import basins, diverse_starts, jumps, refit_from
+from fmuid.profiling.ends import End, locate
+from fmuid.profiling.points import WalkPoint
+from fmuid.profiling.result import ProfileQuality
+from fmuid.profiling.walk import WalkOptions, first_step, walk
+
+#: An end whose half-width differs from the quadratic (Fisher) one by more than this fraction
+#: is non-parabolic and gets diverse-start checks.
+NON_PARABOLIC = 0.3
+
+
+@dataclass(frozen=True)
+class BranchResult:
+    """The points of one branch, from the estimate outwards (estimate not included).
+
+    ``ends`` maps ``"pointwise"`` and ``"simultaneous"`` to the located crossings; ``better``
+    is a point below the optimum when one was met (the branch stops there).
+    """
+
+    index: int
+    direction: int
+    points: list[WalkPoint]
+    better: WalkPoint | None
+    simulations: int
+    ends: dict[str, End] = field(default_factory=dict)
+    quality: ProfileQuality = ProfileQuality()
+
+
+@dataclass
+class _Counts:
+    checks: int = 0
+    starts: int = 0
+    jumps: int = 0
+    lower: int = 0
+    rewalks: int = 0
+    unsettled: list[str] = field(default_factory=list)
+    check_sims: int = 0
+
+
+def settle_branch(
+    problem: Problem,
+    z_hat: np.ndarray,
+    chi2_hat: float,
+    index: int,
+    direction: int,
+    thresholds: dict[str, float],
+    sd_z: float,
+    options: WalkOptions,
+    valleys: Sequence[np.ndarray] = (),
+    thorough: bool = False,
+    seed: int = 0,
+    on_point: Callable[[int], None] | None = None,
+) -> BranchResult:
+    """Walk one branch, locate its CI ends exactly and check that it follows the lowest valley.
+
+    After the walk, each threshold's crossing is located by root-finding on re-fits
+    (:func:`fmuid.profiling.ends.locate`). At each end and at each jump of the profile the
+    other parameters are re-fitted from the other ``valleys`` of the fit check and, where the
+    profile is non-parabolic, jumps, has another parameter on a bound, or ``thorough`` is set,
+    from diverse starts: seeded Latin-hypercube points at the first such site, and at later
+    sites the distinct basins those starts reached (:func:`fmuid.profiling.checks.basins`),
+    moved to the site. A lower chi2 there means the walk followed a higher valley:
+    the stretch towards the estimate is re-walked from the lower valley, the walk goes on
+    outwards from it, and the ends are located again.
+
+    Parameters
+    ----------
+    problem
+        The estimation problem.
+    z_hat, chi2_hat
+        The optimum in fitted coordinates and its chi2.
+    index, direction
+        Which parameter, and which way.
+    thresholds
+        ``"simultaneous"`` (required: the walk's stop) and optionally ``"pointwise"``.
+    sd_z
+        Quadratic (Fisher) standard deviation in fitted coordinates (may be inf).
+    options
+        Walk and check settings.
+    valleys
+        Other minima (all parameters, fitted coordinates) found by the fit check.
+    thorough
+        Check every end from diverse starts (the FMU's objective is non-smooth).
+    seed
+        Seed of the diverse starts.
+    on_point
+        Called with the number of walk points done after each point.
+
+    Returns
+    -------
+    BranchResult
+
+    """
+    sims0 = problem.simulations
+    thr = thresholds["simultaneous"]
+    span = float(problem.z_upper[index] - problem.z_lower[index])
+    estimate = WalkPoint(z_hat.copy(), chi2_hat)
+    points, better = walk(
+        problem, [estimate], chi2_hat, index, direction, thr,
+        first_step(sd_z, thr, span, options), options, on_point,
+    )  # fmt: skip
+    counts = _Counts()
+    ends: dict[str, End] = {}
+    known: list[WalkPoint] = []
+    fresh = True
+    checks = options.checks
+    for round_ in range(checks.max_rewalks + 1):
+        if better is not None:
+            break
+        side = [estimate] + points
+        ends = {
+            kind: locate(
+                problem, index, chi2_hat, float(z_hat[index]), t, side, options.refit,
+                options.end_tolerance,
+            )
+            for kind, t in thresholds.items()
+        }  # fmt: skip
+        sites = _sites(
+            problem, index, side, ends, chi2_hat, thresholds, sd_z, thorough or checks.always
+        )
+        counts.jumps = max(counts.jumps, sum(1 for _, _, why in sites if why == "jump"))
+        lower = None
+        for site, diverse, _ in sites:
+            others: list[np.ndarray] = []
+            if diverse:
+                others = (
+                    list(diverse_starts(problem, checks.end_starts, (seed, index, round_)))
+                    if fresh
+                    else [p.z for p in known]
+                )
+                fresh = False
+            if not valleys and not others:
+                continue
+            c0 = problem.simulations
+            zi = float(site.z[index])
+            from_valleys = refit_from(problem, index, zi, list(valleys), checks.refit)
+            from_others = refit_from(problem, index, zi, others, checks.refit)
+            if others:
+                known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
+            found = from_valleys + from_others
+            counts.check_sims += problem.simulations - c0
+            counts.checks += 1
+            counts.starts += len(valleys) + len(others)
+            if not found:
+                continue
+            best = min(found, key=lambda p: p.chi2)
+            if best.chi2 < chi2_hat - options.better_tol * max(1.0, thr):
+                better = best
+                break
+            if best.chi2 < site.chi2 - checks.lower_tol * thr:
+                lower = best
+                break
+        if better is not None or lower is None:
+            break
+        counts.lower += 1
+        if round_ == checks.max_rewalks:
+            counts.unsettled.append("a lower valley was still found after the last re-walk")
+            break
+        counts.rewalks += 1
+        points, better = _rewalk(problem, side, lower, chi2_hat, index, direction, thr, options)
+    for kind, end in ends.items():
+        if not end.settled:
+            counts.unsettled.append(f"the {kind} end was not located to the tolerance")
+    quality = ProfileQuality(
+        checks=counts.checks,
+        starts=counts.starts,
+        jumps=counts.jumps,
+        lower_valleys=counts.lower,
+        rewalks=counts.rewalks,
+        end_refits=sum(e.refits for e in ends.values()),
+        unsettled=tuple(counts.unsettled),
+        check_simulations=counts.check_sims,
+    )
+    return BranchResult(
+        index, direction, points, better, problem.simulations - sims0, ends, quality
+    )
+
+
+def _sites(
+    problem: Problem,
+    index: int,
+    side: list[WalkPoint],
+    ends: dict[str, End],
+    chi2_hat: float,
+    thresholds: dict[str, float],
+    sd_z: float,
+    thorough: bool,
+) -> list[tuple[WalkPoint, bool, str]]:
+    """Points to check: ``(point, with diverse starts, why)``, the outermost end first."""
+    found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
+    out: list[tuple[WalkPoint, bool, str]] = []
+    z_hat_i = float(side[0].z[index])
+    for kind in ("simultaneous", "pointwise"):
+        end = ends.get(kind)
+        if kind not in thresholds or end is None or end.point is None or end.z is None:
+            continue
+        half = abs(end.z - z_hat_i)
+        quad = np.sqrt(thresholds[kind]) * sd_z
+        odd = not np.isfinite(quad) or abs(half / quad - 1.0) > NON_PARABOLIC
+        on_bound = _others_on_bound(problem, index, end.point.z)
+        out.append((end.point, thorough or odd or on_bound or bool(found), kind))
+    out.extend((side[k], True, "jump") for k in found)
+    return out
+
+
+def _others_on_bound(problem: Problem, index: int, z: np.ndarray) -> bool:
+    lo, hi = problem.z_lower, problem.z_upper
+    tol = 1e-6 * (hi - lo)
+    near = (z <= lo + tol) | (z >= hi - tol)
+    near[index] = False
+    return bool(near.any())
+
+
+def _rewalk(
+    problem: Problem,
+    side: list[WalkPoint],
+    lower: WalkPoint,
+    chi2_hat: float,
+    index: int,
+    direction: int,
+    threshold: float,
+    options: WalkOptions,
+) -> tuple[list[WalkPoint], WalkPoint | None]:
+    """Re-walk inwards from a lower valley while it stays lower, then walk on outwards."""
+    z_hat_i = float(side[0].z[index])
+    reach = abs(lower.z[index] - z_hat_i)
+    inner = [p for p in side[1:] if abs(p.z[index] - z_hat_i) < reach]
+    prev = lower
+    tol = options.checks.lower_tol * threshold
+    for k in range(len(inner) - 1, -1, -1):
+        p = inner[k]
+        if not p.ok:
+            continue
+        [q] = refit_from(problem, index, float(p.z[index]), [prev.z], options.refit) or [p]
+        if q.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
+            return inner[k:] + [lower], q
+        if q.chi2 >= p.chi2 - tol:
+            break
+        inner[k] = q
+        prev = q
+    good = [side[0]] + [p for p in inner if p.ok] + [lower]
+    step = abs(good[-1].z[index] - good[-2].z[index]) or options.min_step
+    more, better = walk(problem, good, chi2_hat, index, direction, threshold, step, options)
+    return inner + [lower] + more, better

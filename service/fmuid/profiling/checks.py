@@ -1,0 +1,154 @@
+"""Right-valley checks: re-fits from diverse seeded starts (Latin hypercube within the bounds)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import qmc
+
+from fmuid.errors import FmuidError
+from fmuid.estimation.optimize import FitOptions, refine
+from fmuid.estimation.problem import Problem
+from fmuid.profiling.points import WalkPoint
+
+
+@dataclass(frozen=True)
+class CheckOptions:
+    """Settings of the multi-start checks.
+
+    Attributes
+    ----------
+    fit_starts
+        Latin-hypercube starts of the check of the fit itself (when it had no global search).
+    end_starts
+        Latin-hypercube starts of a check at a CI end or a jump.
+    always
+        Check every CI end from ``end_starts`` diverse starts; otherwise only ends whose profile
+        is non-parabolic, jumps, is open or has another parameter on a bound (and every end
+        when the FMU health check found the objective non-smooth). Ends are always re-fitted
+        from the other valleys the fit check found.
+    lower_tol
+        A re-fit lower than the walk's chi2 by this fraction of the simultaneous threshold
+        counts as a lower valley.
+    max_rewalks
+        Re-walks per branch after which the branch is reported unsettled.
+    refit
+        Tolerances of the re-fits from diverse starts.
+
+    """
+
+    fit_starts: int = 3
+    end_starts: int = 3
+    always: bool = False
+    lower_tol: float = 2e-3
+    max_rewalks: int = 3
+    refit: FitOptions = field(
+        default_factory=lambda: FitOptions(ftol=1e-6, xtol=1e-6, gtol=1e-6, max_nfev=150)
+    )
+
+
+def diverse_starts(problem: Problem, n: int, seed: Sequence[int]) -> np.ndarray:
+    """Return ``n`` seeded Latin-hypercube points within the bounds, in fitted coordinates."""
+    if n <= 0:
+        return np.zeros((0, problem.n_free))
+    rng = np.random.default_rng(list(seed))
+    unit = qmc.LatinHypercube(d=problem.n_free, seed=rng).random(n)
+    lo, hi = problem.z_lower, problem.z_upper
+    return lo + unit * (hi - lo)
+
+
+def refit_from(
+    problem: Problem,
+    index: int | None,
+    z_fixed: float | None,
+    starts: Sequence[np.ndarray],
+    options: FitOptions,
+) -> list[WalkPoint]:
+    """Re-fit from each start, parameter ``index`` held at ``z_fixed`` (``None``: all free).
+
+    Failed re-fits are left out.
+    """
+    free = np.ones(problem.n_free, bool)
+    if index is not None:
+        free[index] = False
+    out = []
+    for start in starts:
+        z0 = np.array(start, dtype=float)
+        if index is not None and z_fixed is not None:
+            z0[index] = z_fixed
+        try:
+            z, chi2, _ = refine(problem, z0, free=free, options=options)
+        except FmuidError:
+            continue
+        out.append(WalkPoint(z, chi2))
+    return out
+
+
+def check_fit(problem: Problem, options: CheckOptions, seed: int) -> list[WalkPoint]:
+    """Re-fit every parameter from ``options.fit_starts`` diverse seeded starts."""
+    starts = diverse_starts(problem, options.fit_starts, (seed, 12))
+    return refit_from(problem, None, None, list(starts), options.refit)
+
+
+def distinct_valleys(
+    points: Sequence[WalkPoint], problem: Problem, best: WalkPoint, ceiling: float
+) -> list[np.ndarray]:
+    """Minima below ``ceiling`` that differ from ``best`` and from each other (by 1e-3 of span)."""
+    span = problem.z_upper - problem.z_lower
+    kept: list[np.ndarray] = [best.z]
+    for p in sorted(points, key=lambda q: q.chi2):
+        if p.chi2 <= ceiling and all(np.max(np.abs(p.z - k) / span) > 1e-3 for k in kept):
+            kept.append(p.z)
+    return kept[1:]
+
+
+def basins(
+    problem: Problem, found: Sequence[WalkPoint], seen: Sequence[WalkPoint], keep: int
+) -> list[WalkPoint]:
+    """Return the lowest ``keep`` re-fits of ``found`` in basins other than ``seen`` or each other.
+
+    Two re-fits share a basin when no parameter differs by more than 1e-3 of its range. A
+    check's diverse starts end in such basins; the checks further in along the same branch
+    start from them (cheaper than new diverse starts, and they follow the same valleys).
+    """
+    span = problem.z_upper - problem.z_lower
+    kept: list[WalkPoint] = []
+    for p in sorted(found, key=lambda q: q.chi2):
+        if len(kept) < keep and all(
+            np.max(np.abs(p.z - q.z) / span) > 1e-3 for q in [*seen, *kept]
+        ):
+            kept.append(p)
+    return kept
+
+
+def jumps(side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float) -> list[int]:
+    """Positions in ``side`` where the profile jumps, drops or bends unexpectedly.
+
+    In the signed root ``r = sqrt(chi2 - chi2_hat)`` a smooth profile is close to a straight
+    line; a step whose slope in ``r`` differs from the previous step's by more than a factor of
+    three (once the profile has risen by a tenth of the threshold), or a drop of chi2 outwards
+    by more than 1e-3 of the threshold, marks the point after it.
+    """
+    ok = [(k, p) for k, p in enumerate(side) if p.ok]
+    out = []
+    slope_prev = None
+    for (_, p0), (k1, p1) in zip(ok, ok[1:]):
+        dz = abs(p1.z[index] - p0.z[index])
+        if dz == 0:
+            continue
+        if p1.chi2 < p0.chi2 - 1e-3 * threshold:
+            out.append(k1)
+            slope_prev = None
+            continue
+        r0 = np.sqrt(max(p0.chi2 - chi2_hat, 0.0))
+        r1 = np.sqrt(max(p1.chi2 - chi2_hat, 0.0))
+        slope = (r1 - r0) / dz
+        risen = p1.chi2 - chi2_hat > 0.1 * threshold
+        if slope_prev is not None and risen and slope_prev > 0 and slope > 0:
+            ratio = slope / slope_prev
+            if ratio > 3.0 or ratio < 1.0 / 3.0:
+                out.append(k1)
+        slope_prev = slope if risen else None
+    return out

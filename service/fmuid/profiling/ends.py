@@ -1,0 +1,158 @@
+"""Exact confidence-interval ends: root-finding on re-fits once a crossing is bracketed."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fmuid.errors import FmuidError
+from fmuid.estimation.optimize import FitOptions, refine
+from fmuid.estimation.problem import Problem
+from fmuid.profiling.points import WalkPoint
+
+#: Most re-fits spent locating one crossing.
+MAX_REFITS = 12
+
+
+@dataclass(frozen=True)
+class End:
+    """Where the profile crosses a threshold on one side of the estimate.
+
+    Attributes
+    ----------
+    z
+        The profiled parameter's fitted coordinate at the crossing; ``None`` when the profile
+        does not cross inside the bounds (an open end).
+    point
+        The re-fitted point nearest the crossing (``None`` for an open end).
+    refits
+        Re-fits spent locating it.
+    settled
+        ``False`` when the root-finding ran out of re-fits or a re-fit failed before the
+        crossing was located to the tolerance.
+    why_open
+        For an open end: ``"bound"`` (the profile stays under the threshold up to the
+        parameter's bound) or ``"walk stopped"`` (failed points or the point cap ended the walk).
+
+    """
+
+    z: float | None
+    point: WalkPoint | None = None
+    refits: int = 0
+    settled: bool = True
+    why_open: str = ""
+
+
+def rise_root(chi2: float, chi2_hat: float) -> float:
+    """Return ``sqrt(chi2 - chi2_hat)``: linear in ``z`` for a parabolic profile."""
+    return float(np.sqrt(max(chi2 - chi2_hat, 0.0)))
+
+
+def bracket(
+    side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float
+) -> tuple[WalkPoint, WalkPoint] | None:
+    """Return the first pair of consecutive good points that straddles the threshold.
+
+    ``side`` runs from the estimate outwards (estimate first); failed points are skipped.
+    """
+    ok = [p for p in side if p.error is None and np.isfinite(p.chi2)]
+    for p0, p1 in zip(ok, ok[1:]):
+        if p0.chi2 - chi2_hat < threshold <= p1.chi2 - chi2_hat:
+            return p0, p1
+    return None
+
+
+def locate(
+    problem: Problem,
+    index: int,
+    chi2_hat: float,
+    z_hat_i: float,
+    threshold: float,
+    side: Sequence[WalkPoint],
+    options: FitOptions,
+    tolerance: float = 1e-3,
+) -> End:
+    """Locate the crossing of ``chi2_hat + threshold`` on one side by root-finding on re-fits.
+
+    The function whose root is sought is the signed root ``sqrt(chi2(z) - chi2_hat)`` minus
+    ``sqrt(threshold)``, where ``chi2(z)`` re-fits the other parameters with parameter
+    ``index`` fixed at ``z`` (warm-started on the straight line between the bracketing
+    points). Regula falsi with the Illinois modification keeps the bracket; the first guess is
+    the signed-root interpolation, exact for a parabolic profile, and every guess is confirmed
+    by a re-fit. It stops when the next correction is below ``tolerance`` times the
+    half-width ``|z - z_hat|``.
+
+    Parameters
+    ----------
+    problem
+        The estimation problem.
+    index
+        The profiled parameter.
+    chi2_hat, z_hat_i
+        Chi2 at the optimum and the parameter's estimate in fitted coordinates.
+    threshold
+        Chi2 rise that bounds the interval.
+    side
+        Points from the estimate outwards, the estimate first.
+    options
+        Tolerances of the re-fits.
+    tolerance
+        Accuracy of the end, as a fraction of the half-width.
+
+    Returns
+    -------
+    End
+        With ``z=None`` when ``side`` does not straddle the threshold.
+
+    """
+    pair = bracket(side, index, chi2_hat, threshold)
+    if pair is None:
+        return End(None)
+    a, b = pair
+    target = np.sqrt(threshold)
+    free = np.ones(problem.n_free, bool)
+    free[index] = False
+    za, zb = float(a.z[index]), float(b.z[index])
+    fa, fb = rise_root(a.chi2, chi2_hat) - target, rise_root(b.chi2, chi2_hat) - target
+    best = b
+    guess = _secant(za, fa, zb, fb)
+    refits, last_side = 0, 0
+    while refits < MAX_REFITS:
+        if abs(zb - za) <= tolerance * abs(guess - z_hat_i):
+            return End(guess, best, refits)
+        w = (guess - za) / (zb - za)
+        start = (1.0 - w) * a.z + w * b.z
+        start[index] = guess
+        try:
+            z, chi2, _ = refine(problem, start, free=free, options=options)
+        except FmuidError:
+            return End(guess, best, refits + 1, settled=False)
+        refits += 1
+        point = WalkPoint(z, chi2)
+        fg = rise_root(chi2, chi2_hat) - target
+        if abs(fg) <= abs(rise_root(best.chi2, chi2_hat) - target):
+            best = point
+        if fg < 0:
+            a, za, fa = point, guess, fg
+            if last_side < 0:
+                fb /= 2.0
+            last_side = -1
+        else:
+            b, zb, fb = point, guess, fg
+            if last_side > 0:
+                fa /= 2.0
+            last_side = 1
+        nxt = _secant(za, fa, zb, fb)
+        if abs(nxt - guess) <= tolerance * abs(nxt - z_hat_i):
+            return End(nxt, best, refits)
+        guess = nxt
+    return End(guess, best, refits, settled=False)
+
+
+def _secant(za: float, fa: float, zb: float, fb: float) -> float:
+    """Zero of the straight line through ``(za, fa)`` and ``(zb, fb)`` (with ``fa < 0 <= fb``)."""
+    if fb == fa:
+        return 0.5 * (za + zb)
+    return za - fa * (zb - za) / (fb - fa)

@@ -1,0 +1,331 @@
+"""Profile likelihood of every free parameter: walks, intervals, labels, structural check."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from scipy.stats import chi2 as chi2_dist
+
+from fmuid.estimation.optimize import FitOptions, jacobian, make_fit_result, refine
+from fmuid.estimation.problem import Problem
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.model.simulator import fmu_summary
+from fmuid.profiling.branch import BranchResult
+from fmuid.profiling.checks import check_fit, distinct_valleys
+from fmuid.profiling.health import check_health
+from fmuid.profiling.intervals import is_flat, label, open_reason
+from fmuid.profiling.parallel import BranchTask, run_branches
+from fmuid.profiling.points import WalkPoint
+from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
+from fmuid.profiling.structural import structural_check
+from fmuid.profiling.walk import WalkOptions
+from fmuid.progress import Progress, ProgressCallback
+
+log = logging.getLogger(__name__)
+
+#: How often a better optimum found on a profile may restart the profiles.
+MAX_RESTARTS = 3
+
+
+def thresholds(confidence: float, n_free: int) -> dict[str, float]:
+    """Chi-square quantiles at ``confidence``: df = 1 (pointwise) and df = n_free (simultaneous)."""
+    return {
+        "pointwise": float(chi2_dist.ppf(confidence, 1)),
+        "simultaneous": float(chi2_dist.ppf(confidence, n_free)),
+    }
+
+
+def profile_problem(
+    problem: Problem,
+    fit: FitResult,
+    *,
+    only: Sequence[str] | None = None,
+    workers: int | None = None,
+    executor: Any = None,
+    progress: ProgressCallback | None = None,
+    options: WalkOptions = WalkOptions(),
+) -> ProfileResult:
+    """Profile likelihoods of the free parameters around a fit.
+
+    A health check of the objective comes first (non-smooth FMUs get larger finite-difference
+    steps, polished re-fits and checks at every end); a fit without global search is checked
+    from diverse starts (full studies only, ``only=None``). Every parameter is then walked in
+    both directions (branches run in parallel), its pointwise and simultaneous CI ends are
+    located by root-finding on re-fits, the ends are checked for a lower valley, and it is
+    labelled. If a profile finds a lower chi2 than the optimum, the fit is refined from there
+    and the profiles are redone (``better_optimum_found``). See ``docs/profiles.md``.
+
+    Parameters
+    ----------
+    problem
+        The estimation problem.
+    fit
+        The best fit of ``problem``.
+    only
+        Profile only these parameters (default: all free parameters; then the fit is also
+        checked from diverse starts when it had no global search).
+    workers
+        Local worker processes; 1 runs in this process.
+    executor
+        A ``dask.distributed.Client`` to run branches on instead of local processes.
+    progress
+        Receives ``Progress("profile", done, total, detail)`` after every point.
+    options
+        Walk, end and check settings.
+
+    Returns
+    -------
+    ProfileResult
+
+    """
+    t0 = time.perf_counter()
+    sims = fit.cost.simulations
+    conf = problem.spec.confidence
+    thr = thresholds(conf, problem.n_free)
+    names = list(only) if only is not None else list(problem.names)
+    better_found = False
+    health = check_health(problem, fit.z_estimate(), fit.jacobian)
+    sims += health.simulations
+    if not health.smooth:
+        log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
+        refit = replace(options.refit, diff_step=health.diff_step, polish=True)
+        options = replace(options, refit=refit, checks=replace(options.checks, always=True))
+    pool: list[WalkPoint] = []
+    fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
+    if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
+        sims0 = problem.simulations
+        pool = check_fit(problem, options.checks, problem.spec.seed)
+        fit_check["starts"] = len(pool)
+        best = min(pool, key=lambda p: p.chi2, default=None)
+        if best is not None and best.chi2 < fit.chi2 - options.better_tol * max(
+            1.0, thr["simultaneous"]
+        ):
+            log.info("the fit check found chi2 %.6g below the fit's %.6g", best.chi2, fit.chi2)
+            fit_check["lower_found"] = True
+            better_found = True
+            pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
+            fit = _refit(problem, best.z, fit, options.refit)
+            sims += fit.cost.simulations
+        fit_check["simulations"] = problem.simulations - sims0
+        sims += problem.simulations - sims0
+    for _ in range(MAX_RESTARTS + 1):
+        valleys = distinct_valleys(
+            pool, problem, WalkPoint(fit.z_estimate(), fit.chi2), fit.chi2 + thr["simultaneous"]
+        )
+        branches, branch_sims = _walk_all(
+            problem, fit, names, thr, workers, executor, progress, options, valleys
+        )
+        sims += branch_sims
+        better = [b.better for b in branches if b.better is not None]
+        if not better:
+            break
+        better_found = True
+        best = min(better, key=lambda p: p.chi2)
+        log.info("profile found chi2 %.6g below the optimum %.6g; refitting", best.chi2, fit.chi2)
+        pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
+        fit = _refit(problem, best.z, fit, options.refit)
+        sims += fit.cost.simulations
+    check = structural_check(
+        fit.jacobian, problem.names, problem.scales, [fit.estimates[n] for n in problem.names]
+    )
+    sd = fit.fisher_sd_z()
+    profiles = {}
+    s0 = problem.simulations
+    for name in names:
+        i = problem.names.index(name)
+        sides = [b for b in branches if b.index == i]
+        profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check)
+    sims += problem.simulations - s0
+    fit_check["valleys"] = len(valleys)
+    if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
+        fit = replace(fit, fmu_info=fmu_summary(problem.fmu_path, problem.spec.interface))
+    return ProfileResult(
+        fit=fit,
+        confidence=conf,
+        thresholds=thr,
+        parameters=profiles,
+        better_optimum_found=better_found,
+        structural_check=check,
+        cost=Cost(sims, time.perf_counter() - t0 + fit.cost.seconds),
+        checks={"health": health.to_dict(), "fit": fit_check},
+    )
+
+
+def _refit(problem: Problem, z0: np.ndarray, fit: FitResult, walk: FitOptions) -> FitResult:
+    """Refine from a lower point and return the new fit (polished when the walk's re-fits are)."""
+    sims0, t_refit = problem.simulations, time.perf_counter()
+    z, chi2, message = refine(problem, z0, options=FitOptions(polish=walk.polish))
+    jac = jacobian(problem, z)
+    return make_fit_result(problem, z, chi2, jac, message, fit.global_search, t_refit, sims0)
+
+
+def _walk_all(
+    problem: Problem,
+    fit: FitResult,
+    names: Sequence[str],
+    thr: dict[str, float],
+    workers: int | None,
+    executor: Any,
+    progress: ProgressCallback | None,
+    options: WalkOptions,
+    valleys: Sequence[np.ndarray],
+) -> tuple[list[BranchResult], int]:
+    z_hat = fit.z_estimate()
+    sd = fit.fisher_sd_z()
+    seed = problem.spec.seed
+    tasks = [
+        BranchTask(
+            problem, z_hat, fit.chi2, problem.names.index(n), d, thr["simultaneous"], sd[n],
+            options, pointwise=thr["pointwise"], valleys=tuple(valleys), seed=seed,
+        )
+        for n in names
+        for d in (-1, 1)
+    ]  # fmt: skip
+    expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
+    done: dict[tuple[int, int], int] = {}
+
+    def on_point(index: int, direction: int, n: int) -> None:
+        done[(index, direction)] = n
+        if progress:
+            per_branch = {
+                (t.index, t.direction): max(done.get((t.index, t.direction), 0), expected)
+                for t in tasks
+            }
+            total = sum(per_branch.values())
+            parts = []
+            for name in names:
+                i = problem.names.index(name)
+                got = done.get((i, -1), 0) + done.get((i, 1), 0)
+                parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
+            progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
+
+    results = run_branches(tasks, workers=workers, executor=executor, on_point=on_point)
+    return results, sum(r.simulations for r in results)
+
+
+def _assemble(
+    problem: Problem,
+    fit: FitResult,
+    index: int,
+    sides: list[BranchResult],
+    thr: dict[str, float],
+    sd_z: float,
+    check: dict[str, Any],
+) -> ParameterProfile:
+    name = problem.names[index]
+    estimate_point = ProfilePoint(
+        value=fit.estimates[name],
+        chi2=float(fit.chi2),
+        params={n: v for n, v in fit.estimates.items() if n != name},
+        at_bound=_point(problem, index, fit.z_estimate(), fit.chi2, None).at_bound,
+    )
+    by_dir = {b.direction: b for b in sides}
+    walks: dict[int, list[tuple[float, ProfilePoint]]] = {}
+    ends: dict[str, list[float | None]] = {"pointwise": [None, None], "simultaneous": [None, None]}
+    limited: set[str] = set()
+    quality = ProfileQuality()
+    for k, d in enumerate((-1, 1)):
+        branch = by_dir.get(d)
+        if branch is None:
+            walks[d] = []
+            continue
+        quality = quality + branch.quality
+        extra = [e.point for e in branch.ends.values() if e.point is not None]
+        pts = {float(p.z[index]): p for p in branch.points + extra}
+        walks[d] = sorted(
+            ((z, _point(problem, index, p.z, p.chi2, p.error)) for z, p in pts.items()),
+            key=lambda zp: abs(zp[0] - fit.z_estimate()[index]),
+        )
+        for kind, end in branch.ends.items():
+            ends[kind][k] = _value(problem, index, end.z)
+            if kind == "simultaneous" and end.point is not None:
+                limited.update(_point(problem, index, end.point.z, end.point.chi2, None).at_bound)
+    points = [p for _, p in reversed(walks[-1])] + [estimate_point] + [p for _, p in walks[1]]
+    sim = (ends["simultaneous"][0], ends["simultaneous"][1])
+    bounds = (float(problem.lower[index]), float(problem.upper[index]))
+    why_open = tuple(
+        open_reason([estimate_point] + [p for _, p in walks[d]], bounds[k])
+        if sim[k] is None
+        else ""
+        for k, d in enumerate((-1, 1))
+    )
+    flat = is_flat(points, fit.chi2, thr["simultaneous"])
+    partners, meaning = _null_direction(problem, name, check, flat, walks)
+    status, reason = label(name, flat, sim, (why_open[0], why_open[1]), partners, meaning)
+    return ParameterProfile(
+        name=name,
+        estimate=fit.estimates[name],
+        lower=float(problem.lower[index]),
+        upper=float(problem.upper[index]),
+        scale=problem.scales[index],
+        ci_simultaneous=sim,
+        ci_pointwise=(ends["pointwise"][0], ends["pointwise"][1]),
+        status=status,
+        points=tuple(points),
+        limited_by=tuple(sorted(limited)),
+        fisher_sd_z=sd_z,
+        status_reason=reason,
+        quality=quality,
+    )
+
+
+def _null_direction(
+    problem: Problem,
+    name: str,
+    check: dict[str, Any],
+    flat: bool,
+    walks: dict[int, list[tuple[float, ProfilePoint]]],
+) -> tuple[list[str] | None, str]:
+    """Find a null direction of the noise-free sensitivities that involves ``name``.
+
+    Looked for at the estimate and, for a flat profile, at the outermost good points of its
+    profile. Returns the other parameters of the direction and its meaning, or ``(None, "")``.
+    """
+    combos = list(check["non_identifiable_combinations"])
+    if flat and not any(name in c["parameters"] for c in combos):
+        for side in walks.values():
+            ok = [p for _, p in side if p.error is None and np.isfinite(p.chi2)]
+            if not ok:
+                continue
+            values = {name: ok[-1].value, **ok[-1].params}
+            z = problem.to_z(values)
+            local = structural_check(
+                jacobian(problem, z), problem.names, problem.scales,
+                [values[n] for n in problem.names],
+            )  # fmt: skip
+            combos += local["non_identifiable_combinations"]
+    for c in combos:
+        if name in c["parameters"]:
+            return [n for n in c["parameters"] if n != name], str(c["meaning"])
+    return None, ""
+
+
+def _point(
+    problem: Problem, index: int, z: np.ndarray, chi2: float, error: str | None
+) -> ProfilePoint:
+    values = problem.from_z(z)
+    lo, hi = problem.z_lower, problem.z_upper
+    tol = 1e-6 * (hi - lo)
+    at_bound = tuple(
+        n
+        for k, n in enumerate(problem.names)
+        if k != index and (z[k] <= lo[k] + tol[k] or z[k] >= hi[k] - tol[k])
+    )
+    return ProfilePoint(
+        value=values[problem.names[index]],
+        chi2=float(chi2),
+        params={n: v for n, v in values.items() if n != problem.names[index]},
+        at_bound=at_bound,
+        error=error,
+    )
+
+
+def _value(problem: Problem, index: int, z: float | None) -> float | None:
+    if z is None:
+        return None
+    return float(10.0**z) if problem.scales[index] == "log" else float(z)

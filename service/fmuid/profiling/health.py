@@ -1,0 +1,197 @@
+"""FMU health check before profiling: determinism, reset, noise floor, jumps of chi2."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from fmuid.errors import FmuidError
+from fmuid.estimation.optimize import safe_residuals
+from fmuid.estimation.predictor import FmuPredictor
+from fmuid.estimation.problem import Problem
+from fmuid.model.simulator import Simulator, get_simulator, mark_reset_unreliable
+
+#: Relative step of the noise probe (scipy's default finite-difference step in fitted coordinates).
+PROBE_STEP = 1e-6
+#: Grid points on each side of the estimate along each parameter, each step raising chi2 by
+#: about a quarter when only that parameter moves (so the grid spans a chi2 rise of about 4)...
+GRID_SIDE = 4
+#: ...but no step longer than this fraction of the parameter's range (weakly sensitive ones).
+GRID_SPAN = 2e-3
+#: A finite-difference step must make the change of the residuals this many times their noise.
+SIGNAL_TO_NOISE = 1e3
+#: Largest finite-difference step (relative, fitted coordinates).
+MAX_DIFF_STEP = 1e-2
+
+
+@dataclass(frozen=True)
+class Health:
+    """What the health check found (reported under ``checks.health`` in the profile result).
+
+    Attributes
+    ----------
+    deterministic
+        Two runs at the estimate gave bit-identical outputs.
+    reset_matches_fresh
+        A run of the reused (reset) instance equals a run of a fresh instance (``None`` when
+        the outputs do not come straight from the FMU).
+    noise_floor
+        Per parameter: the noise of the weighted residuals under steps of ``PROBE_STEP``
+        (fourth differences, Moré and Wild's ECnoise estimate), in units of sigma.
+    jumps
+        Per parameter: points of a grid along the parameter alone (steps of half its
+        conditional standard deviation, at most ``GRID_SPAN`` of its range) where chi2 departs
+        from a smooth (quartic) curve.
+    diff_step
+        The finite-difference step chosen for the re-fits (relative, fitted coordinates).
+    simulations
+        Simulations spent on the check.
+
+    """
+
+    deterministic: bool
+    reset_matches_fresh: bool | None
+    noise_floor: dict[str, float] = field(default_factory=dict)
+    jumps: dict[str, int] = field(default_factory=dict)
+    diff_step: float = PROBE_STEP
+    simulations: int = 0
+
+    @property
+    def smooth(self) -> bool:
+        """Whether the objective is deterministic and smooth enough for the default steps.
+
+        An unreliable reset does not count: from its detection on every run gets a fresh
+        instance, so the objective is as smooth as the FMU.
+        """
+        return self.deterministic and not any(self.jumps.values()) and self.diff_step <= PROBE_STEP
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the check."""
+        return {
+            "smooth": self.smooth,
+            "deterministic": self.deterministic,
+            "reset_matches_fresh": self.reset_matches_fresh,
+            "noise_floor": dict(self.noise_floor),
+            "jumps": dict(self.jumps),
+            "diff_step": self.diff_step,
+            "simulations": self.simulations,
+        }
+
+
+def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> Health:
+    """Probe the objective around the estimate.
+
+    Parameters
+    ----------
+    problem
+        The estimation problem.
+    z_hat
+        The estimate in fitted coordinates.
+    jacobian
+        Weighted residual Jacobian at the estimate (fitted coordinates); its column norms set
+        the grid steps.
+
+    Returns
+    -------
+    Health
+        With ``diff_step`` raised above the noise floor where the residuals are noisy.
+
+    """
+    sims0 = problem.simulations
+    fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
+    r0 = safe_residuals(problem, z_hat)
+    deterministic = bool(np.array_equal(r0, safe_residuals(problem, z_hat)))
+    noise: dict[str, float] = {}
+    jumps: dict[str, int] = {}
+    steps = [PROBE_STEP]
+    lo, hi = problem.z_lower, problem.z_upper
+    for i, name in enumerate(problem.names):
+        scale = max(1.0, abs(float(z_hat[i])))
+        h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
+        rows = [r0] + [safe_residuals(problem, _moved(z_hat, i, k * h)) for k in range(1, 5)]
+        fourth = rows[0] - 4 * rows[1] + 6 * rows[2] - 4 * rows[3] + rows[4]
+        noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
+        slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
+        if noise[name] > 0 and slope > 0:
+            steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
+        norm = float(np.linalg.norm(jacobian[:, i]))
+        d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
+        grid = np.clip(z_hat[i] + d * np.arange(-GRID_SIDE, GRID_SIDE + 1), lo[i], hi[i])
+        grid = np.unique(grid)
+        chi2 = np.array(
+            [float(r0 @ r0) if g == z_hat[i] else _chi2(problem, _at(z_hat, i, g)) for g in grid]
+        )
+        jumps[name] = _departures(grid, chi2)
+    return Health(
+        deterministic=deterministic,
+        reset_matches_fresh=fresh,
+        noise_floor=noise,
+        jumps=jumps,
+        diff_step=float(min(max(steps), MAX_DIFF_STEP)),
+        simulations=problem.simulations - sims0,
+    )
+
+
+def _moved(z: np.ndarray, i: int, dz: float) -> np.ndarray:
+    out = z.copy()
+    out[i] += dz
+    return out
+
+
+def _at(z: np.ndarray, i: int, zi: float) -> np.ndarray:
+    out = z.copy()
+    out[i] = zi
+    return out
+
+
+def _chi2(problem: Problem, z: np.ndarray) -> float:
+    r = safe_residuals(problem, z)
+    return float(r @ r)
+
+
+def _departures(grid: np.ndarray, chi2: np.ndarray) -> int:
+    """Points where chi2 departs from a least-squares quartic by 1 % of its range."""
+    if grid.size < 7 or not np.all(np.isfinite(chi2)):
+        return 0
+    x = (grid - grid.mean()) / (np.ptp(grid) or 1.0)
+    fit = np.polyval(np.polyfit(x, chi2, 4), x)
+    spread = max(float(np.ptp(chi2)), 1e-9 * max(1.0, float(np.max(np.abs(chi2)))))
+    return int(np.sum(np.abs(chi2 - fit) > 0.01 * spread))
+
+
+def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
+    """Compare the reused instance's outputs with a fresh instance's, experiment by experiment.
+
+    When they differ, the FMU's reset is unreliable: :func:`mark_reset_unreliable` makes every
+    later run, here and in the branch workers forked after this check, use a fresh instance in
+    a recycled simulation process.
+    """
+    predictor = problem.predictor
+    if not isinstance(predictor, FmuPredictor):
+        return None
+    if get_simulator(problem.fmu_path, predictor.interface).reset_reliable is False:
+        return False
+    values = {**predictor.fixed, **problem.from_z(z_hat)}
+    reused = problem.predict(problem.from_z(z_hat))
+    try:
+        sim = Simulator(problem.fmu_path, predictor.interface, reset_reliable=False)
+    except FmuidError:
+        return False
+    try:
+        for exp, out in zip(problem.experiments, reused, strict=True):
+            t_in, u = predictor.inputs_of(exp)
+            y = sim.simulate(values, t_in, u, exp.time, problem.outputs)
+            problem.simulations += 1
+            if not all(
+                np.array_equal(y[:, j], out[o], equal_nan=True)
+                for j, o in enumerate(problem.outputs)
+            ):
+                mark_reset_unreliable(problem.fmu_path, predictor.interface)
+                return False
+    except FmuidError:
+        return False
+    finally:
+        sim.close()
+    return True

@@ -1,0 +1,211 @@
+"""The result of a profile-likelihood study (contract: "Profile result")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from fmuid.estimation.result import Cost, FitResult
+
+IDENTIFIABLE = "identifiable"
+PRACTICALLY_NON_IDENTIFIABLE = "practically_non_identifiable"
+STRUCTURALLY_NON_IDENTIFIABLE = "structurally_non_identifiable"
+
+
+@dataclass(frozen=True)
+class ProfilePoint:
+    """One point of a profile.
+
+    Attributes
+    ----------
+    value
+        The profiled parameter's value (parameter units).
+    chi2
+        The re-fitted chi2 there (``nan`` when the simulation or the fit failed).
+    params
+        The other free parameters after the re-fit.
+    at_bound
+        Names of the other parameters sitting on a bound there.
+    error
+        Why the point failed, or ``None``.
+
+    """
+
+    value: float
+    chi2: float
+    params: dict[str, float]
+    at_bound: tuple[str, ...] = ()
+    error: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the point."""
+        out: dict[str, Any] = {
+            "value": float(self.value),
+            "chi2": None if self.error else float(self.chi2),
+            "params": {k: float(v) for k, v in self.params.items()},
+            "at_bound": list(self.at_bound),
+        }
+        if self.error:
+            out["error"] = self.error
+        return out
+
+
+@dataclass(frozen=True)
+class ProfileQuality:
+    """How a profile was checked (contract: ``quality``), summed over its branches.
+
+    Attributes
+    ----------
+    checks
+        Right-valley checks made (re-fits of the other parameters from several starts at a CI
+        end or a jump).
+    starts
+        Starts tried in those checks.
+    jumps
+        Points where the profile jumped, dropped or bent unexpectedly.
+    lower_valleys
+        Checks that found a lower chi2 than the walk.
+    rewalks
+        Stretches re-walked from a lower valley.
+    end_refits
+        Re-fits spent locating the CI ends by root-finding.
+    unsettled
+        Why the tool could not settle the profile (empty when it could).
+    check_simulations
+        Simulations spent on the checks.
+
+    """
+
+    checks: int = 0
+    starts: int = 0
+    jumps: int = 0
+    lower_valleys: int = 0
+    rewalks: int = 0
+    end_refits: int = 0
+    unsettled: tuple[str, ...] = ()
+    check_simulations: int = 0
+
+    def __add__(self, other: ProfileQuality) -> ProfileQuality:
+        """Combine the records of two branches."""
+        return ProfileQuality(
+            self.checks + other.checks,
+            self.starts + other.starts,
+            self.jumps + other.jumps,
+            self.lower_valleys + other.lower_valleys,
+            self.rewalks + other.rewalks,
+            self.end_refits + other.end_refits,
+            self.unsettled + other.unsettled,
+            self.check_simulations + other.check_simulations,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the record."""
+        return {
+            "checks": self.checks,
+            "starts": self.starts,
+            "jumps": self.jumps,
+            "lower_valleys": self.lower_valleys,
+            "rewalks": self.rewalks,
+            "end_refits": self.end_refits,
+            "unsettled": bool(self.unsettled),
+            "unsettled_reasons": list(self.unsettled),
+            "check_simulations": self.check_simulations,
+        }
+
+
+@dataclass(frozen=True)
+class ParameterProfile:
+    """Profile, intervals and label of one free parameter.
+
+    ``points`` are sorted by value and include the estimate. A CI end is ``None`` when the
+    profile does not cross the threshold inside the bounds.
+    """
+
+    name: str
+    estimate: float
+    lower: float
+    upper: float
+    scale: str
+    ci_simultaneous: tuple[float | None, float | None]
+    ci_pointwise: tuple[float | None, float | None]
+    status: str
+    points: tuple[ProfilePoint, ...]
+    limited_by: tuple[str, ...] = ()
+    fisher_sd_z: float = float("inf")
+    status_reason: str = ""
+    quality: ProfileQuality = ProfileQuality()
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the parameter's entry."""
+        out: dict[str, Any] = {
+            "estimate": float(self.estimate),
+            "lower": float(self.lower),
+            "upper": float(self.upper),
+            "scale": self.scale,
+            "ci": {
+                "simultaneous": [_num(v) for v in self.ci_simultaneous],
+                "pointwise": [_num(v) for v in self.ci_pointwise],
+            },
+            "status": self.status,
+            "status_reason": self.status_reason,
+            "quality": self.quality.to_dict(),
+            "profile": [p.to_dict() for p in self.points],
+        }
+        if self.limited_by:
+            out["limited_by"] = list(self.limited_by)
+        return out
+
+
+@dataclass(frozen=True)
+class ProfileResult:
+    """Profiles of every free parameter around the best fit."""
+
+    fit: FitResult
+    confidence: float
+    thresholds: dict[str, float]
+    parameters: dict[str, ParameterProfile]
+    better_optimum_found: bool
+    structural_check: dict[str, Any]
+    cost: Cost
+    extra: dict[str, Any] = field(default_factory=dict)
+    checks: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def chi2(self) -> float:
+        """Chi2 at the optimum."""
+        return self.fit.chi2
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form of the contract."""
+        return {
+            "fmu": {
+                "sha256": self.fit.fmu_sha256,
+                "model_name": self.fit.model_name,
+                **self.fit.fmu_info,
+            },
+            "n_data": self.fit.n_data,
+            "chi2": float(self.fit.chi2),
+            "confidence": self.confidence,
+            "thresholds": dict(self.thresholds),
+            "sigma": {k: float(v) for k, v in self.fit.sigma.items()},
+            "sigma_method": dict(self.fit.sigma_method),
+            "parameters": {
+                n: {**p.to_dict(), "unit": self.fit.units.get(n, "")}
+                for n, p in self.parameters.items()
+            },
+            "better_optimum_found": self.better_optimum_found,
+            "structural_check": self.structural_check,
+            "checks": self.checks,
+            "cost": self.cost.to_dict(),
+            "units": dict(self.fit.units),
+        }
+
+    def to_frame(self) -> Any:
+        """Return a pandas table: estimate, both intervals, label and unit per parameter."""
+        from fmuid.results import to_frame
+
+        return to_frame(self)
+
+
+def _num(v: float | None) -> float | None:
+    return None if v is None else float(v)
