@@ -14,6 +14,7 @@ from fmuid.experiment_design.discriminate import (
     Hypothesis,
     default_space,
     discriminating_experiment,
+    discriminating_experiments,
 )
 from fmuid.model.builtin import builtin_fmu
 from fmuid.plots import discrimination_figure
@@ -65,6 +66,21 @@ def test_proposal_measures_both_sensors_at_full_amplitude(proposal):
     assert doc["expected_p_value"] < 1e-3
     fig = discrimination_figure(found)
     assert len(fig.axes) == 3
+
+
+def test_one_hypothesis_against_several_equals_each_pair(proposal):
+    # A's predictions and sensitivities are shared between the pairs; the answers are the pairs'
+    spec, space, lag, delay, found = proposal
+    slower = Hypothesis(
+        "slower_lag", lag.parameters, {**lag.values, "tau_sensor": TAU / 2}, lag.wrappers
+    )
+    both = discriminating_experiments("msd", spec, space, lag, [delay, slower])
+    assert both[0].trial == found.trial
+    assert both[0].separation == pytest.approx(found.separation, rel=1e-9)
+    alone = discriminating_experiment("msd", spec, space, lag, slower)
+    assert both[1].trial == alone.trial
+    assert both[1].separation == pytest.approx(alone.separation, rel=1e-9)
+    assert both[1].hypotheses == ("sensor_lag", "slower_lag")
 
 
 def test_discrimination_report_shows_both_predictions_and_the_numbers(proposal, tmp_path):

@@ -21,7 +21,7 @@ from fmuid.experiment_design.discriminate import (
     Discrimination,
     Hypothesis,
     default_space,
-    discriminating_experiment,
+    discriminating_experiments,
 )
 
 SETTLES = 1e-3
@@ -38,7 +38,8 @@ too small to settle the tie does not pay for the full fits."""
 
 CANDIDATES = 2
 """Tests sampled per input family (step, chirp, multisine) for each tie: the screen's cost
-(about 2 (n + 2) simulations per test) stays a fraction of the diagnosis."""
+(about 2 (n + 2) simulations per test, the named candidate's share computed once for all
+ties) stays a fraction of the diagnosis."""
 
 
 def hypothesis(fit: CandidateFit) -> Hypothesis:
@@ -77,12 +78,10 @@ def settling_tests(
     space = default_space(problem).model_copy(update={"candidates": CANDIDATES})
     a = hypothesis(named)
     floor = float(stats.chi2.isf(SETTLES, 1)) / CONFIRM_BELOW
-    return [
-        discriminating_experiment(
-            problem.fmu_path, problem.spec, space, a, hypothesis(t.fit), confirm_from=floor
-        )
-        for t in ties[:MAX_TIES]
-    ]
+    others = [hypothesis(t.fit) for t in ties[:MAX_TIES]]
+    return discriminating_experiments(
+        problem.fmu_path, problem.spec, space, a, others, confirm_from=floor
+    )
 
 
 def settles(found: Discrimination) -> bool:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -190,32 +190,53 @@ def _clean(problem: Problem, values: Mapping[str, float]) -> dict[str, np.ndarra
     return {o: y[o][mask] for o in problem.outputs}
 
 
-def _linear_misfit(fitted: Problem, start: Mapping[str, float]) -> float:
-    """Gauss-Newton misfit: the residual's part outside the span of the sensitivities."""
-    z = fitted.to_z(start)
-    r = fitted.residuals(z)
-    jac = jacobian(fitted, z)
-    step, *_ = np.linalg.lstsq(jac, r, rcond=None)
-    rest = r - jac @ step
-    return float(rest @ rest)
+class _Screen:
+    """One hypothesis on the tests of a space, each piece computed once per test.
+
+    Its noise-free prediction and the Jacobian of its weighted residuals (which, with the noise
+    given by the space, does not depend on the data) serve every other hypothesis it is
+    compared with. Tests are known by their index in the list of the space's tests.
+    """
+
+    def __init__(self, fmu: Path, spec: Spec, space: Space, hypothesis: Hypothesis):
+        self.fmu, self.spec, self.space, self.hypothesis = fmu, spec, space, hypothesis
+        self._clean: dict[int, dict[str, np.ndarray]] = {}
+        self._jac: dict[int, np.ndarray] = {}
+
+    def problem(self, trial: Trial, data: Mapping[str, np.ndarray] | None = None) -> Problem:
+        return self.hypothesis.problem(self.fmu, self.spec, self.space, trial, data)
+
+    def clean(self, k: int, trial: Trial) -> dict[str, np.ndarray]:
+        """Its noise-free prediction of the samples of test ``k``."""
+        if k not in self._clean:
+            self._clean[k] = _clean(self.problem(trial), self.hypothesis.values)
+        return self._clean[k]
+
+    def misfit(self, k: int, trial: Trial, data: Mapping[str, np.ndarray], full: bool) -> float:
+        """Its chi2 fitted to ``data``: Gauss-Newton (linearised) or by a full fit."""
+        problem = self.problem(trial, data)
+        if full:
+            return fit_problem(problem, start=self.hypothesis.values, global_search=False).chi2
+        z = problem.to_z(self.hypothesis.values)
+        if k not in self._jac:
+            self._jac[k] = jacobian(problem, z)
+        jac = self._jac[k]
+        r = problem.residuals(z)
+        step, *_ = np.linalg.lstsq(jac, r, rcond=None)
+        rest = r - jac @ step
+        return float(rest @ rest)
 
 
 def _separation(
-    fmu: Path, spec: Spec, space: Space, trial: Trial, a: Hypothesis, b: Hypothesis, full: bool
+    a: _Screen, b: _Screen, k: int, trial: Trial, full: bool
 ) -> tuple[dict[str, float], dict[str, dict[str, np.ndarray]]]:
-    ya = _clean(a.problem(fmu, spec, space, trial), a.values)
-    yb = _clean(b.problem(fmu, spec, space, trial), b.values)
-    sep = {}
-    for fitted, data, name in (
-        (b, ya, f"{b.name} fitted to {a.name}"),
-        (a, yb, f"{a.name} fitted to {b.name}"),
-    ):
-        problem = fitted.problem(fmu, spec, space, trial, data)
-        if full:
-            sep[name] = fit_problem(problem, start=fitted.values, global_search=False).chi2
-        else:
-            sep[name] = _linear_misfit(problem, fitted.values)
-    return sep, {a.name: ya, b.name: yb}
+    ya, yb = a.clean(k, trial), b.clean(k, trial)
+    na, nb = a.hypothesis.name, b.hypothesis.name
+    sep = {
+        f"{nb} fitted to {na}": b.misfit(k, trial, ya, full),
+        f"{na} fitted to {nb}": a.misfit(k, trial, yb, full),
+    }
+    return sep, {na: ya, nb: yb}
 
 
 def discriminating_experiment(
@@ -254,37 +275,74 @@ def discriminating_experiment(
     Discrimination
 
     """
+    found = discriminating_experiments(
+        fmu, spec, space, a, [b], progress=progress, confirm_from=confirm_from
+    )
+    return found[0]
+
+
+def discriminating_experiments(
+    fmu: str | Path,
+    spec: Spec,
+    space: Space,
+    a: Hypothesis,
+    others: Sequence[Hypothesis],
+    *,
+    progress: ProgressCallback | None = None,
+    confirm_from: float = 0.0,
+) -> list[Discrimination]:
+    """Propose, for each of ``others``, the test that best tells it from ``a``.
+
+    As :func:`discriminating_experiment` for each pair (A, B) of ``others``, with A's
+    predictions and sensitivities on each test computed once for all of them.
+    """
     path = Path(resolve_fmu(fmu))
     trials = [
         t.with_(outputs=s)
         for t in sample_trials(space, np.random.default_rng(space.seed))
         for s in space.sensor_sets()
     ]
-    scored = []
-    for k, trial in enumerate(trials):
-        sep, _ = _separation(path, spec, space, trial, a, b, full=False)
-        scored.append((min(sep.values()), k))
-        if progress:
-            progress(Progress("discriminate", k + 1, len(trials), "linearised screen"))
-    scored.sort(reverse=True)
-    if scored[0][0] < confirm_from:
-        trial = trials[scored[0][1]]
-        sep, pred = _separation(path, spec, space, trial, a, b, full=False)
+    screen_a = _Screen(path, spec, space, a)
+    total = len(trials) * len(others)
+    found = []
+    for i, b in enumerate(others):
+        screen_b = _Screen(path, spec, space, b)
+        scored = []
+        for k, trial in enumerate(trials):
+            sep, _ = _separation(screen_a, screen_b, k, trial, full=False)
+            scored.append((min(sep.values()), k))
+            if progress:
+                done = i * len(trials) + k + 1
+                progress(Progress("discriminate", done, total, "linearised screen"))
+        found.append(_best(screen_a, screen_b, trials, scored, confirm_from))
+    return found
+
+
+def _best(
+    a: _Screen, b: _Screen, trials: list[Trial], scored: list[tuple[float, int]], floor: float
+) -> Discrimination:
+    """Return the best screened test, confirmed by full fits when it reaches ``floor``."""
+    scored = sorted(scored, reverse=True)
+    if scored[0][0] < floor:
+        k = scored[0][1]
+        trial = trials[k]
+        sep, pred = _separation(a, b, k, trial, full=False)
         confirmed = False
     else:
         best: tuple[float, Trial, dict[str, float], dict[str, dict[str, np.ndarray]]] | None = None
         for _, k in scored[:CONFIRM]:
-            sep, pred = _separation(path, spec, space, trials[k], a, b, full=True)
+            sep, pred = _separation(a, b, k, trials[k], full=True)
             if best is None or min(sep.values()) > best[0]:
                 best = (min(sep.values()), trials[k], sep, pred)
         assert best is not None
         _, trial, sep, pred = best
         confirmed = True
+    space = a.space
     sigma = {o: space.outputs[o].sigma for o in trial.outputs}
+    names = (a.hypothesis.name, b.hypothesis.name)
     return Discrimination(
-        trial, (a.name, b.name), sep, output_times(trial), pred, space.input, len(trials), sigma,
-        confirmed,
-    )  # fmt: skip
+        trial, names, sep, output_times(trial), pred, space.input, len(trials), sigma, confirmed
+    )
 
 
 def default_space(problem: Problem) -> Space:
