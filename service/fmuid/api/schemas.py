@@ -7,10 +7,7 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
-from fmuid.jobs.store import Job
-
-Kind = Literal["fit", "profile", "diagnose", "design"]
-Status = Literal["queued", "running", "done", "failed", "cancelled"]
+from fmuid.jobs.records import Job, Kind, Status
 
 
 class JobCreated(BaseModel):
@@ -56,8 +53,8 @@ class JobOut(BaseModel):
         """Build the response from a stored job."""
         return cls(
             id=job.id,
-            kind=job.kind,  # type: ignore[arg-type]
-            status=job.status,  # type: ignore[arg-type]
+            kind=job.kind,
+            status=job.status,
             progress=JobProgress(
                 done=job.progress_done, total=job.progress_total, stage=job.progress_stage
             ),

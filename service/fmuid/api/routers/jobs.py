@@ -156,7 +156,6 @@ def cancel_or_remove_job(
     job: Annotated[Job, Depends(get_job)],
     store: Annotated[JobStore, Depends(get_store)],
     supervisor: Annotated[Supervisor, Depends(get_supervisor)],
-    settings: Annotated[Settings, Depends(get_settings)],
 ) -> JobOut:
     """Cancel a queued or running job (its process is killed at once); remove a finished one.
 
@@ -164,7 +163,7 @@ def cancel_or_remove_job(
     uploads no other job uses; the answer is its last state, and it is 404 afterwards.
     """
     if job.status in FINAL_STATUSES:
-        delete_jobs(store, settings.data_dir, [job.id])
+        delete_jobs(store, [job.id])
         return JobOut.from_job(job)
     if store.cancel(job.id):
         supervisor.cancel(job.id)
