@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from datetime import UTC, datetime
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
@@ -92,6 +92,10 @@ class ErrorOut(BaseModel):
     """Body of every 4xx/5xx answer the service gives on purpose."""
 
     detail: str
+
+
+UNAUTHORIZED: dict[str, Any] = {"model": ErrorOut, "description": "Missing or wrong bearer token."}
+"""The 401 answer of every route but health, as documented in the OpenAPI schema."""
 
 
 def _time(seconds: float) -> datetime:

@@ -17,7 +17,7 @@ from fmuid.api.deps import (
 )
 from fmuid.api.forms import FormOffLoop
 from fmuid.api.results import ResultOut
-from fmuid.api.schemas import ErrorOut, JobCreated, JobList, JobOut, Kind
+from fmuid.api.schemas import UNAUTHORIZED, ErrorOut, JobCreated, JobList, JobOut, Kind
 from fmuid.api.submission import SubmissionError, Upload, submit
 from fmuid.api.vetting import PoolBusy, VettingPool
 from fmuid.jobs.health import StoreHealth
@@ -31,7 +31,7 @@ router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=FormOffLoop)
 SQLITE_MAX_INT = 2**63 - 1  # larger integers overflow SQLite's OFFSET (found by schemathesis)
 
 _ERRORS: dict[int | str, dict[str, Any]] = {
-    401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
+    401: UNAUTHORIZED,
     404: {"model": ErrorOut, "description": "No job with this id."},
 }
 
