@@ -32,21 +32,21 @@ logger = logging.getLogger(__name__)
 
 
 def write_report(
-    result: Any, directory: Path, fmu: Path, experiments: list[Any], spec: Any
+    result: Any, layout: DataLayout, job_id: str, fmu: Path, experiments: list[Any], spec: Any
 ) -> None:
-    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not).
+    """Write a job's HTML report (or its error file saying why not).
 
-    It is drawn in ``<directory>.tmp`` (the marker made by whoever started the drawing) and
-    renamed to ``directory``.
+    It is drawn in the job's report marker (made by whoever started the drawing) and renamed
+    to the job's report folder.
     """
-    tmp = directory.with_name(directory.name + ".tmp")
-    error_file = directory.with_name(directory.name + ".error")
+    directory, tmp = layout.report(job_id), layout.report_marker(job_id)
+    error_file = layout.report_error(job_id)
     try:
         from fmuid.report import write_report as report
 
         report(result, tmp, fmu=fmu, experiments=experiments, spec=spec)
     except Exception as exc:  # a failed report must not fail a finished job
-        logger.exception("report of %s failed", directory.name)
+        logger.exception("report of %s failed", job_id)
         shutil.rmtree(tmp, ignore_errors=True)
         with contextlib.suppress(OSError):
             error_file.write_text(f"{type(exc).__name__}: {exc}")
@@ -85,7 +85,7 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
             else:
                 experiments = [load_experiment(path) for path in data]
             result = result_from_dict(json.loads(text))
-            write_report(result, layout.report(job_id), fmu, experiments, spec)
+            write_report(result, layout, job_id, fmu, experiments, spec)
     except Exception as exc:  # reading the job back failed: say why, the job stays done
         logger.exception("report of %s failed", job_id)
         shutil.rmtree(tmp, ignore_errors=True)
