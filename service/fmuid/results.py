@@ -1,4 +1,4 @@
-"""Saved results back as result objects (``load_result``) and as pandas tables (``to_frame``).
+"""Saved results back as result objects (``load_result``); their tables are ``to_frame``.
 
 The kind of a result JSON is read from its shape: ``designs`` (design), ``mismatch``
 (diagnose), ``thresholds`` (profile), else ``parameters`` with ``chi2`` (fit).
@@ -6,7 +6,6 @@ The kind of a result JSON is read from its shape: ``designs`` (design), ``mismat
 
 from __future__ import annotations
 
-import importlib
 import json
 from pathlib import Path
 from typing import Any
@@ -18,11 +17,6 @@ from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis
 from fmuid.errors import SpecError
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
-
-PANDAS_MISSING = (
-    "to_frame() needs pandas, which fmuid does not install by default; "
-    "install it with: pip install 'fmuid[report]'"
-)
 
 
 def load_result(path: str | Path) -> Any:
@@ -77,16 +71,10 @@ def result_from_dict(data: dict[str, Any]) -> Any:
 
 
 def _design_from_dict(data: dict[str, Any]) -> Any:
-    try:
-        module = importlib.import_module("fmuid.experiment_design.result")
-    except ImportError as exc:
-        raise SpecError(
-            "design results need fmuid.experiment_design, which this fmuid lacks"
-        ) from exc
-    reader = getattr(getattr(module, "DesignResult", None), "from_dict", None)
-    if reader is None:
-        raise SpecError("this fmuid cannot read design results back (no DesignResult.from_dict)")
-    return reader(data)
+    # imported on first use: the design package is only needed for design results
+    from fmuid.experiment_design.result import DesignResult
+
+    return DesignResult.from_dict(data)
 
 
 def _cost(data: dict[str, Any] | None) -> Cost:
@@ -247,97 +235,3 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         units=dict(data.get("units", {})),
         discriminating_experiment=data.get("discriminating_experiment"),
     )
-
-
-def pandas_module() -> Any:
-    """Return pandas, or raise an ImportError that says how to install it."""
-    try:
-        import pandas
-    except ImportError as exc:
-        raise ImportError(PANDAS_MISSING) from exc
-    return pandas
-
-
-def to_frame(result: FitResult | ProfileResult | Diagnosis) -> Any:
-    """Return a result as a pandas ``DataFrame`` indexed by parameter name.
-
-    Columns, by kind (open interval ends are ``NaN``):
-
-    - fit: ``estimate``, ``unit``, ``lower``, ``upper`` (bounds), ``scale``, ``at_bound``;
-    - profile: ``estimate``, ``unit``, ``ci_low``, ``ci_high`` (simultaneous), ``pw_low``,
-      ``pw_high`` (pointwise), ``status``, ``limited_by``, ``lower``, ``upper``, ``scale``;
-    - diagnose: ``role`` (``model`` or ``added``), ``before``, ``after``, ``unit``,
-      ``ci_low``, ``ci_high`` (added parameters' intervals).
-
-    Raises
-    ------
-    ImportError
-        If pandas is not installed (the message says how to install it).
-
-    """
-    pd = pandas_module()
-    if isinstance(result, ProfileResult):
-        rows = {
-            n: _profile_row(p, result.fit.units.get(n, "")) for n, p in result.parameters.items()
-        }
-    elif isinstance(result, FitResult):
-        d = result.to_dict()["parameters"]
-        rows = {
-            n: {
-                "estimate": p["estimate"],
-                "unit": p["unit"],
-                "lower": p["lower"],
-                "upper": p["upper"],
-                "scale": p["scale"],
-                "at_bound": p["at_bound"],
-            }
-            for n, p in d.items()
-        }
-    else:
-        rows = _diagnosis_rows(result)
-    frame = pd.DataFrame.from_dict(rows, orient="index")
-    frame.index.name = "parameter"
-    return frame
-
-
-def _nan(v: float | None) -> float:
-    return float("nan") if v is None else float(v)
-
-
-def _profile_row(p: ParameterProfile, unit: str) -> dict[str, Any]:
-    return {
-        "estimate": p.estimate,
-        "unit": unit,
-        "ci_low": _nan(p.ci_simultaneous[0]),
-        "ci_high": _nan(p.ci_simultaneous[1]),
-        "pw_low": _nan(p.ci_pointwise[0]),
-        "pw_high": _nan(p.ci_pointwise[1]),
-        "status": p.status,
-        "limited_by": ", ".join(p.limited_by),
-        "lower": p.lower,
-        "upper": p.upper,
-        "scale": p.scale,
-    }
-
-
-def _diagnosis_rows(result: Diagnosis) -> dict[str, dict[str, Any]]:
-    rows: dict[str, dict[str, Any]] = {}
-    for name in {**result.parameters_before, **result.parameters_after}:
-        rows[name] = {
-            "role": "model",
-            "before": _nan(result.parameters_before.get(name)),
-            "after": _nan(result.parameters_after.get(name)),
-            "unit": result.units.get(name, ""),
-            "ci_low": float("nan"),
-            "ci_high": float("nan"),
-        }
-    for name, added in result.added_parameters.items():
-        rows[name] = {
-            "role": "added",
-            "before": added.off,
-            "after": added.estimate,
-            "unit": added.unit,
-            "ci_low": _nan(added.ci[0]),
-            "ci_high": _nan(added.ci[1]),
-        }
-    return rows

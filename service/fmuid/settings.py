@@ -12,8 +12,7 @@ from pathlib import Path
 from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from fmuid.data.limits import InputLimits
-from fmuid.jobs.fmucheck import FmuLimits
+from fmuid.data.limits import FmuLimits, InputLimits
 
 _INPUT = InputLimits()
 _FMU = FmuLimits()

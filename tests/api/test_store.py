@@ -5,7 +5,8 @@ from __future__ import annotations
 import io
 
 from fmuid.jobs.crash import exit_message
-from fmuid.jobs.store import MAX_ATTEMPTS, Dataset, JobStore
+from fmuid.jobs.restarts import MAX_ATTEMPTS, recover
+from fmuid.jobs.store import Dataset, JobStore
 
 
 def make_store(tmp_path):
@@ -34,7 +35,7 @@ def test_jobs_survive_reopening_and_running_ones_are_requeued(tmp_path):
     assert store.claim_next().id == first.id
     store.set_progress(first.id, 3, 10, "profile")
     reopened = make_store(tmp_path)
-    assert [j.id for j in reopened.recover()] == [first.id]
+    assert [j.id for j in recover(reopened)] == [first.id]
     job = reopened.get(first.id)
     assert job.status == "queued" and job.attempts == 1 and job.datasets[0].name == "step.csv"
     assert [j.id for j in reopened.list_jobs()] == [second.id, first.id]
@@ -46,7 +47,7 @@ def test_a_job_interrupted_too_often_fails_with_the_reason(tmp_path):
     job = store.create("fit", "{}", blob(store, b"x"), "m", [])
     for _ in range(MAX_ATTEMPTS):
         assert store.claim_next().id == job.id
-        store.recover()
+        recover(store)
     failed = store.get(job.id)
     assert failed.status == "failed" and f"{MAX_ATTEMPTS} times" in failed.error
 

@@ -10,8 +10,10 @@ import time
 import pytest
 
 from fmuid.jobs import housekeeping as hk
+from fmuid.jobs import restarts
 from fmuid.jobs.crash import FMI_VERSION_LINE, fmi_call_in_traceback
 from fmuid.jobs.health import StoreHealth
+from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.store import Dataset, JobStore, QueueFull, StoreError
 
 
@@ -129,12 +131,12 @@ def test_removing_a_finished_job_removes_its_files_and_unshared_blobs(tmp_path, 
     gone, kept = finished_job(store, b"one"), finished_job(store, b"two")
     running = store.create("fit", "{}", kept.fmu_sha256, "m", [])
     store.claim_next()
-    files = hk.job_files(tmp_path, gone.id)
+    files = DataLayout(tmp_path).job_files(gone.id)
     files[0].mkdir(parents=True)
     (files[0] / "index.html").write_text("<html>")
     files[3].parent.mkdir(parents=True)
     files[3].write_text("log")
-    assert hk.delete_jobs(store, tmp_path, [gone.id, running.id]) == [gone.id]
+    assert hk.delete_jobs(store, [gone.id, running.id]) == [gone.id]
     assert store.get(gone.id) is None and store.result(gone.id) is None
     assert not any(path.exists() for path in files)
     assert not store.blob_path(gone.fmu_sha256).exists()
@@ -155,27 +157,31 @@ def test_retention_removes_only_old_finished_jobs(tmp_path):
 def test_orphan_files_are_swept_and_live_jobs_keep_theirs(tmp_path):
     store = make_store(tmp_path)
     job = finished_job(store)
-    orphan = hk.job_files(tmp_path, "no-such-job")
-    for path in (orphan[0], hk.job_tmp_dir(tmp_path, job.id), hk.job_tmp_dir(tmp_path, "x")):
+    orphan = DataLayout(tmp_path).job_files("no-such-job")
+    for path in (
+        orphan[0],
+        DataLayout(tmp_path).job_tmp(job.id),
+        DataLayout(tmp_path).job_tmp("x"),
+    ):
         path.mkdir(parents=True)
-    hk.remove_orphans(store, tmp_path, alive={job.id})
-    assert not orphan[0].exists() and not hk.job_tmp_dir(tmp_path, "x").exists()
-    assert hk.job_tmp_dir(tmp_path, job.id).exists()
-    hk.remove_orphans(store, tmp_path, alive=set())
-    assert not hk.job_tmp_dir(tmp_path, job.id).exists()
+    hk.remove_orphans(store, alive={job.id})
+    assert not orphan[0].exists() and not DataLayout(tmp_path).job_tmp("x").exists()
+    assert DataLayout(tmp_path).job_tmp(job.id).exists()
+    hk.remove_orphans(store, alive=set())
+    assert not DataLayout(tmp_path).job_tmp(job.id).exists()
 
 
 def test_the_lease_keeps_a_second_service_out_until_the_first_is_gone(tmp_path, monkeypatch):
     store = make_store(tmp_path)
-    hk.take_lease(store)
-    hk.take_lease(store)  # the holder may take it again
+    restarts.take_lease(store)
+    restarts.take_lease(store)  # the holder may take it again
     monkeypatch.setattr(os, "getpid", lambda: 2**22 + 1)  # another process
-    with pytest.raises(hk.LeaseHeld, match="in use by service process"):
-        hk.take_lease(store)
+    with pytest.raises(restarts.LeaseHeld, match="in use by service process"):
+        restarts.take_lease(store)
     monkeypatch.undo()
-    hk.release_lease(store)
+    restarts.release_lease(store)
     monkeypatch.setattr(os, "getpid", lambda: 2**22 + 1)
-    hk.take_lease(store)
+    restarts.take_lease(store)
 
 
 def test_a_lease_of_a_dead_service_is_taken_over(tmp_path):
@@ -183,7 +189,7 @@ def test_a_lease_of_a_dead_service_is_taken_over(tmp_path):
     with store.transaction() as conn:  # a service that was SIGKILLed a moment ago
         conn.execute("INSERT INTO lease (id, pid, heartbeat) VALUES (1, ?, ?)", (2**22 + 3, 0))
         conn.execute("UPDATE lease SET heartbeat = ?", (time.time(),))
-    hk.take_lease(store)
+    restarts.take_lease(store)
 
 
 @pytest.mark.parametrize(

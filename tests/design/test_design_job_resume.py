@@ -6,7 +6,8 @@ import shutil
 from design_cases import MSD_SPACE, MSD_SPEC, SMALL, Stop, comparable, counting
 
 from fmuid.jobs import housekeeping as hk
-from fmuid.jobs import run
+from fmuid.jobs import restarts, run
+from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.store import Dataset, JobStore
 from fmuid.model.builtin import builtin_fmu
 
@@ -45,15 +46,15 @@ def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
         except Stop:
             pass
     assert calls["screen"] == 5 and store.get(job.id).status == "running"
-    assert hk.checkpoint_dir(tmp_path, job.id).is_dir()
-    hk.remove_orphans(store, tmp_path, alive=set())  # what a restart sweeps keeps it
-    assert [j.id for j in store.recover()] == [job.id]
-    hk.remove_orphans(store, tmp_path, alive=set())
+    assert DataLayout(tmp_path).checkpoint(job.id).is_dir()
+    hk.remove_orphans(store, alive=set())  # what a restart sweeps keeps it
+    assert [j.id for j in restarts.recover(store)] == [job.id]
+    hk.remove_orphans(store, alive=set())
     calls.update(screen=0, verify=0)
     assert run.run_job(store, store.claim_next(), 2000, None) == 0
     assert store.get(job.id).status == "done"
     assert calls == {"screen": 8 - 5 + 1, "verify": 2}  # + the rate-halved trade-off
-    assert not hk.checkpoint_dir(tmp_path, job.id).exists()
+    assert not DataLayout(tmp_path).checkpoint(job.id).exists()
     assert comparable(json.loads(store.result(job.id))) == comparable(serial.to_dict())
 
 
@@ -64,9 +65,9 @@ def test_a_finished_or_removed_job_leaves_no_checkpoint(tmp_path):
     failed = store.create("design", "{}", fmu, "m", [])
     store.fail(failed.id, "exceeded the time limit of 1 s")
     for job_id in (queued.id, failed.id, "no-such-job"):
-        hk.checkpoint_dir(tmp_path, job_id).mkdir(parents=True)
-    hk.remove_orphans(store, tmp_path, alive=set())
-    assert hk.checkpoint_dir(tmp_path, queued.id).is_dir()
-    assert not hk.checkpoint_dir(tmp_path, failed.id).exists()
-    assert not hk.checkpoint_dir(tmp_path, "no-such-job").exists()
-    assert hk.checkpoint_dir(tmp_path, failed.id) in hk.job_files(tmp_path, failed.id)
+        DataLayout(tmp_path).checkpoint(job_id).mkdir(parents=True)
+    hk.remove_orphans(store, alive=set())
+    assert DataLayout(tmp_path).checkpoint(queued.id).is_dir()
+    assert not DataLayout(tmp_path).checkpoint(failed.id).exists()
+    assert not DataLayout(tmp_path).checkpoint("no-such-job").exists()
+    assert DataLayout(tmp_path).checkpoint(failed.id) in DataLayout(tmp_path).job_files(failed.id)

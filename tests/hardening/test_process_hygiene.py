@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from api_helpers import msd_spec
 
-from fmuid.jobs.housekeeping import job_tmp_root
+from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.proc import job_command, job_environment
 from fmuid.jobs.store import Dataset, JobStore
 
@@ -71,7 +71,7 @@ def test_sigkill_of_the_service_leaves_no_job_process(service_factory, step_csv,
     assert wait_until(lambda: len(tagged_processes(db)) >= 2, 60)
     service.stop()
     assert wait_until(lambda: not tagged_processes(db), 20), tagged_processes(db)
-    tmp_root = job_tmp_root(data_dir)  # the jobs' temporary files are gone
+    tmp_root = DataLayout(data_dir).job_tmp_root  # the jobs' temporary files are gone
     assert not tmp_root.exists() or not list(tmp_root.iterdir())
 
 

@@ -50,11 +50,7 @@ class BearerAuth:
             await self.app(scope, receive, send)
             return
         header = dict(scope["headers"]).get(b"authorization", b"")
-        scheme, _, given = header.partition(b" ")
-        if scheme.lower() == b"bearer" and secrets.compare_digest(given.strip(), self.token):
-            await self.app(scope, receive, send)
-            return
-        if self._signed(scope, path):
+        if self._bearer(header) or self._signed(scope, path):
             await self.app(scope, receive, send)
             return
         detail = "missing bearer token" if not header else "wrong bearer token"
@@ -64,6 +60,11 @@ class BearerAuth:
             headers={"WWW-Authenticate": 'Bearer realm="fmuid"'},
         )
         await response(scope, receive, send)
+
+    def _bearer(self, header: bytes) -> bool:
+        """Whether an ``Authorization`` header is ``Bearer <token>``."""
+        scheme, _, given = header.partition(b" ")
+        return scheme.lower() == b"bearer" and secrets.compare_digest(given.strip(), self.token)
 
     def _signed(self, scope: Scope, path: str) -> bool:
         """Whether a GET of a report file carries the right ``sig``."""

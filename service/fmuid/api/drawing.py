@@ -22,9 +22,10 @@ from pathlib import Path
 
 import anyio.to_thread
 
-from fmuid.jobs.draw import forked_drawing, report_paths
-from fmuid.jobs.housekeeping import job_tmp_root, remove_paths
+from fmuid.jobs.draw import forked_drawing
+from fmuid.jobs.housekeeping import remove_paths
 from fmuid.jobs.launcher import WarmServer
+from fmuid.jobs.layout import DataLayout
 from fmuid.settings import Settings
 
 logger = logging.getLogger(__name__)
@@ -53,6 +54,7 @@ class ReportDrawer:
     def __init__(self, settings: Settings, warm: WarmServer):
         self.settings = settings
         self.warm = warm
+        self.layout = DataLayout(settings.data_dir)
         self._drawing: dict[str, asyncio.Task[str | None]] = {}
 
     async def report_dir(self, job_id: str) -> Path:
@@ -64,7 +66,7 @@ class ReportDrawer:
             When the report could not be drawn; the message names the cause.
 
         """
-        directory, _, error = report_paths(self.settings.data_dir, job_id)
+        directory, error = self.layout.report(job_id), self.layout.report_error(job_id)
         if not (directory / "index.html").is_file() and not error.is_file():
             task = self._drawing.get(job_id)
             if task is None:
@@ -85,7 +87,8 @@ class ReportDrawer:
 
         Returns the reason when not even the marker could be made (nowhere to write it).
         """
-        directory, marker, error = report_paths(self.settings.data_dir, job_id)
+        directory, marker = self.layout.report(job_id), self.layout.report_marker(job_id)
+        error = self.layout.report_error(job_id)
         try:
             marker.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -99,7 +102,7 @@ class ReportDrawer:
             return None
         except OSError as exc:
             return f"cannot make the report folder {marker}: {exc}"
-        work = job_tmp_root(self.settings.data_dir) / f"{job_id}.report"
+        work = self.layout.report_work(job_id)
         try:
             work.mkdir(parents=True, exist_ok=True)
             arguments = (self._arguments(job_id), work, os.getpid())

@@ -25,7 +25,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.responses import Response
 
 from fmuid.api.auth import OPEN_PATHS
-from fmuid.api.schemas import ErrorOut
+from fmuid.api.schemas import UNAUTHORIZED, ErrorOut
 from fmuid.data import Spec
 
 _ERROR_REF = {"$ref": "#/components/schemas/ErrorOut"}
@@ -144,7 +144,7 @@ def answer_options(router: APIRouter) -> None:
                     "description": "No body; the Allow header lists the methods.",
                     "headers": {"Allow": {"schema": {"type": "string"}}},
                 },
-                401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
+                401: UNAUTHORIZED,
             },
             openapi_extra={"parameters": parameters} if parameters else None,
         )

@@ -40,18 +40,6 @@ class FitParameterOut(BaseModel):
     upper: float
 
 
-class FitResultOut(BaseModel):
-    """Result of a ``fit`` job."""
-
-    model_config = _OPEN
-    fmu: FmuOut
-    n_data: int
-    chi2: float = Field(description="Weighted sum of squared residuals.")
-    sigma: dict[str, float]
-    parameters: dict[str, FitParameterOut]
-    cost: CostOut
-
-
 class IntervalsOut(BaseModel):
     """Likelihood-based confidence intervals; an end is null when it is not crossed."""
 
@@ -70,17 +58,30 @@ class ProfilePointOut(BaseModel):
     at_bound: list[str] = []
 
 
-class ProfileParameterOut(BaseModel):
+class ProfileParameterOut(FitParameterOut):
     """The profile of one free parameter."""
 
-    model_config = _OPEN
-    estimate: float
-    lower: float
-    upper: float
     ci: IntervalsOut
     status: Literal["identifiable", "practically_non_identifiable", "structurally_non_identifiable"]
     profile: list[ProfilePointOut]
     limited_by: list[str] | None = None
+
+
+class _EstimatedOut(BaseModel):
+    """What a fit and a profile result share: the FMU, the data, the optimum, the cost."""
+
+    model_config = _OPEN
+    fmu: FmuOut
+    n_data: int
+    chi2: float = Field(description="Weighted sum of squared residuals.")
+    sigma: dict[str, float]
+    cost: CostOut
+
+
+class FitResultOut(_EstimatedOut):
+    """Result of a ``fit`` job."""
+
+    parameters: dict[str, FitParameterOut]
 
 
 class ThresholdsOut(BaseModel):
@@ -91,20 +92,14 @@ class ThresholdsOut(BaseModel):
     simultaneous: float
 
 
-class ProfileResultOut(BaseModel):
+class ProfileResultOut(_EstimatedOut):
     """Result of a ``profile`` job."""
 
-    model_config = _OPEN
-    fmu: FmuOut
-    n_data: int
-    chi2: float
     confidence: float
     thresholds: ThresholdsOut
-    sigma: dict[str, float]
     parameters: dict[str, ProfileParameterOut]
     better_optimum_found: bool
     structural_check: dict[str, Any]
-    cost: CostOut
 
 
 class DiagnosisOut(BaseModel):

@@ -3,14 +3,11 @@
 from __future__ import annotations
 
 from datetime import UTC, datetime
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from fmuid.jobs.store import Job
-
-Kind = Literal["fit", "profile", "diagnose", "design"]
-Status = Literal["queued", "running", "done", "failed", "cancelled"]
+from fmuid.jobs.records import Job, Kind, Status
 
 
 class JobCreated(BaseModel):
@@ -56,8 +53,8 @@ class JobOut(BaseModel):
         """Build the response from a stored job."""
         return cls(
             id=job.id,
-            kind=job.kind,  # type: ignore[arg-type]
-            status=job.status,  # type: ignore[arg-type]
+            kind=job.kind,
+            status=job.status,
             progress=JobProgress(
                 done=job.progress_done, total=job.progress_total, stage=job.progress_stage
             ),
@@ -95,6 +92,10 @@ class ErrorOut(BaseModel):
     """Body of every 4xx/5xx answer the service gives on purpose."""
 
     detail: str
+
+
+UNAUTHORIZED: dict[str, Any] = {"model": ErrorOut, "description": "Missing or wrong bearer token."}
+"""The 401 answer of every route but health, as documented in the OpenAPI schema."""
 
 
 def _time(seconds: float) -> datetime:

@@ -19,6 +19,7 @@ from typing import BinaryIO
 
 from fmuid.api.vetting import VettingPool
 from fmuid.errors import FmuidError
+from fmuid.jobs.records import Kind
 from fmuid.jobs.store import Dataset, Job, JobStore
 from fmuid.jobs.vet import VetTask
 from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu
@@ -89,7 +90,7 @@ def submit(
     store: JobStore,
     pool: VettingPool,
     settings: Settings,
-    kind: str,
+    kind: Kind,
     spec: str,
     data: list[Upload],
     fmu: Upload | None,

@@ -1,5 +1,8 @@
 """Size limits of the input files, so that reading any file costs time linear in a bounded size.
 
+:class:`InputLimits` bounds CSV files and specs, :class:`FmuLimits` the checks of an uploaded FMU
+(:mod:`fmuid.jobs.fmucheck`).
+
 The defaults suit the CLI and the service alike; the service takes each from its ``FMUID_<NAME>``
 setting (:class:`fmuid.settings.Settings`). A file over a limit is refused before or while it is
 parsed, with a message naming the limit and the service's setting of it.
@@ -9,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-__all__ = ["InputLimits", "over_limit"]
+__all__ = ["FmuLimits", "InputLimits", "over_limit"]
 
 
 @dataclass(frozen=True)
@@ -47,6 +50,32 @@ class InputLimits:
         for field in fields(self):
             if getattr(self, field.name) < 1:
                 raise ValueError(f"{field.name} must be at least 1")
+
+
+@dataclass(frozen=True)
+class FmuLimits:
+    """Limits of the checks of an uploaded FMU (each a ``FMUID_<NAME>`` service setting).
+
+    Attributes
+    ----------
+    max_fmu_unpacked_bytes
+        Sum of the members' unpacked sizes [bytes].
+    max_model_description_bytes
+        Unpacked size of ``modelDescription.xml`` [bytes].
+    max_model_variables
+        Variables listed in ``modelDescription.xml``.
+    probe_timeout_s
+        Wall-clock time the binary may take to load [s].
+    probe_memory_mb
+        Address space of the process that loads the binary [MiB].
+
+    """
+
+    max_fmu_unpacked_bytes: int = 200 * 1024 * 1024
+    max_model_description_bytes: int = 32 * 1024 * 1024
+    max_model_variables: int = 100_000
+    probe_timeout_s: float = 10.0
+    probe_memory_mb: int = 1024
 
 
 def over_limit(noun: str, field: str, limits: InputLimits) -> str:

@@ -188,10 +188,33 @@ class Diagnosis:
         return {"verdict": verdict(out), **out}
 
     def to_frame(self) -> Any:
-        """Return a pandas table of the parameters before and after, and the added ones."""
-        from fmuid.results import to_frame
+        """Return a pandas table of the parameters before and after, and the added ones.
 
-        return to_frame(self)
+        Columns: ``role`` (``model`` or ``added``), ``before``, ``after``, ``unit``, ``ci_low``,
+        ``ci_high`` (the added parameters' intervals; open ends are NaN).
+        """
+        from fmuid.frames import nan_if_none, parameter_frame
+
+        rows: dict[str, dict[str, Any]] = {}
+        for name in {**self.parameters_before, **self.parameters_after}:
+            rows[name] = {
+                "role": "model",
+                "before": nan_if_none(self.parameters_before.get(name)),
+                "after": nan_if_none(self.parameters_after.get(name)),
+                "unit": self.units.get(name, ""),
+                "ci_low": float("nan"),
+                "ci_high": float("nan"),
+            }
+        for name, added in self.added_parameters.items():
+            rows[name] = {
+                "role": "added",
+                "before": added.off,
+                "after": added.estimate,
+                "unit": added.unit,
+                "ci_low": nan_if_none(added.ci[0]),
+                "ci_high": nan_if_none(added.ci[1]),
+            }
+        return parameter_frame(rows)
 
 
 def verdict(d: dict[str, Any]) -> str:

@@ -138,7 +138,12 @@ class FitResult:
         }
 
     def to_frame(self) -> Any:
-        """Return a pandas table of the estimates, one row per free parameter (needs pandas)."""
-        from fmuid.results import to_frame
+        """Return a pandas table of the estimates, one row per free parameter (needs pandas).
 
-        return to_frame(self)
+        Columns: ``estimate``, ``unit``, ``lower``, ``upper`` (bounds), ``scale``, ``at_bound``.
+        """
+        from fmuid.frames import parameter_frame
+
+        columns = ("estimate", "unit", "lower", "upper", "scale", "at_bound")
+        params = self.to_dict()["parameters"]
+        return parameter_frame({n: {c: p[c] for c in columns} for n, p in params.items()})

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from fmuid.estimation.result import Cost
-from fmuid.experiment_design.signals import Trial
+from fmuid.experiment_design.signals import Trial, trial_from_dict
 from fmuid.experiment_design.verify import Verification
 
 
@@ -51,6 +51,28 @@ class RankedDesign:
             "score": _num(self.score),
             "cost": {"duration": self.trial.duration, "sensors": len(self.trial.outputs)},
         }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> RankedDesign:
+        """Build a design back from :meth:`to_dict` (a verification keeps its median widths)."""
+        predicted = {
+            n: {
+                "ci": [_float_or_none(e) for e in p["ci"]],
+                "status": p["status"],
+                **({"width_z": _float(p["width"])} if "width" in p else {}),
+            }
+            for n, p in data["predicted"].items()
+        }
+        verified = data.get("verified")
+        trial = trial_from_dict(data["experiment"])
+        if "duration" in data.get("cost", {}):  # unrounded, unlike the experiment's
+            trial = trial.with_(duration=float(data["cost"]["duration"]))
+        return cls(
+            trial=trial,
+            score=_float(data["score"]),
+            predicted=predicted,
+            verified=None if verified is None else _verification(verified),
+        )
 
 
 @dataclass(frozen=True)
@@ -114,6 +136,28 @@ class DesignResult:
             },
         }
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> DesignResult:
+        """Build a design result back from :meth:`to_dict` (``fmuid.load_result`` calls it).
+
+        Equal to the saved result in everything its JSON holds; a verification's per-draw
+        widths come back as their median, and its cost as zero.
+        """
+        cost = dict(data.get("cost", {}))
+        designs = tuple(RankedDesign.from_dict(d) for d in data["designs"])
+        return cls(
+            fmu_sha256=str(data["fmu"]["sha256"]),
+            model_name=str(data["fmu"]["model_name"]),
+            input_name=str(data["designs"][0]["experiment"]["input_variable"]) if designs else "",
+            criterion=str(data["criterion"]),
+            designs=designs,
+            not_identifiable_by_any=list(data.get("not_identifiable_by_any", ())),
+            tradeoffs=dict(data.get("tradeoffs", {})),
+            screened=int(data.get("screened", 0)),
+            cost=Cost(int(cost.pop("simulations", 0)), float(cost.pop("seconds", 0.0))),
+            stage_seconds={k: float(v) for k, v in cost.items()},
+        )
+
     def to_frame(self) -> Any:
         """Return one row per design: settings, score, predicted widths, verified counts.
 
@@ -122,7 +166,7 @@ class DesignResult:
         ImportError
             If pandas is not installed (the ``report`` extra).
         """
-        from fmuid.results import pandas_module
+        from fmuid.frames import pandas_module
 
         rows = []
         for rank, d in enumerate(self.designs, 1):
@@ -138,6 +182,27 @@ class DesignResult:
                     row[f"{n} verified"] = f"{d.verified.identifiable[n]}/{d.verified.draws}"
             rows.append(row)
         return pandas_module().DataFrame(rows)
+
+
+def _verification(d: dict[str, Any]) -> Verification:
+    """Build a verification back from its JSON form (one width per parameter: the median)."""
+    return Verification(
+        draws=int(d["draws"]),
+        identifiable={n: int(k) for n, k in d["identifiable"].items()},
+        open_ended={n: int(k) for n, k in d.get("open_ended", {}).items()},
+        widths={n: [_float(w)] for n, w in d["median_width"].items()},
+        simulations=0,
+        seconds=0.0,
+    )
+
+
+def _float(v: Any) -> float:
+    """Return a JSON number as a float; ``null`` (a non-finite number saved) as NaN."""
+    return math.nan if v is None else float(v)
+
+
+def _float_or_none(v: Any) -> float | None:
+    return None if v is None else float(v)
 
 
 def _num(v: Any) -> float | None:

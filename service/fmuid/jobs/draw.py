@@ -5,10 +5,10 @@ A job stores its result and ends; nothing draws until someone asks for the repor
 ``mkdir`` succeeds, so one drawing at a time) and starts :func:`draw_job_report` in a process
 forked by the warm server (matplotlib is imported there already). That process reads the result,
 the FMU, the data and the spec back from the store, draws into the marker folder and renames it
-to ``reports/<id>/``; when drawing fails it writes the reason to ``reports/<id>.error`` instead.
-The job's row is never touched: a report that cannot be drawn leaves the job ``done``. A result
-whose JSON cannot be read back into its object (a design result) is kept pickled beside the
-reports by the job (:func:`keep_result`) for its drawing.
+to ``reports/<id>/``; when drawing fails it writes the reason to ``reports/<id>.error`` instead
+(paths: :class:`fmuid.jobs.layout.DataLayout`). The job's row is never touched: a report that
+cannot be drawn leaves the job ``done``. The result object is read back from the stored JSON
+(:func:`fmuid.results.result_from_dict`), whatever the job's kind.
 """
 
 from __future__ import annotations
@@ -17,13 +17,13 @@ import contextlib
 import json
 import logging
 import os
-import pickle
 import shutil
 import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
+from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.proc import JOB_NICENESS
 from fmuid.jobs.store import JobStore
 from fmuid.profiling.pool_guard import die_with_pool_owner
@@ -31,63 +31,22 @@ from fmuid.profiling.pool_guard import die_with_pool_owner
 logger = logging.getLogger(__name__)
 
 
-def result_copy(data_dir: Path, job_id: str) -> Path:
-    """Return where a job keeps its result object when its JSON cannot be read back."""
-    return data_dir / "reports" / f"{job_id}.pickle"
-
-
-def keep_result(result: Any, result_json: str, data_dir: Path, job_id: str) -> None:
-    """Keep a pickled copy of ``result`` when its JSON cannot be read back (a design result).
-
-    Only this service writes the file, beside its reports, and only its drawing reads it.
-    """
-    from fmuid.errors import SpecError
-    from fmuid.results import result_from_dict
-
-    try:
-        result_from_dict(json.loads(result_json))
-    except SpecError:
-        path = result_copy(data_dir, job_id)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(pickle.dumps(result))
-
-
-def _stored_result(text: str, data_dir: Path, job_id: str) -> Any:
-    """Return a job's result object: from its JSON, or from the copy of :func:`keep_result`."""
-    from fmuid.errors import SpecError
-    from fmuid.results import result_from_dict
-
-    try:
-        return result_from_dict(json.loads(text))
-    except SpecError:
-        copy = result_copy(data_dir, job_id)
-        if not copy.is_file():
-            raise
-        return pickle.loads(copy.read_bytes())  # written by this service's job
-
-
-def report_paths(data_dir: Path, job_id: str) -> tuple[Path, Path, Path]:
-    """Return a job's report folder, its "being drawn" marker and its error file."""
-    reports = data_dir / "reports"
-    return reports / job_id, reports / f"{job_id}.tmp", reports / f"{job_id}.error"
-
-
 def write_report(
-    result: Any, directory: Path, fmu: Path, experiments: list[Any], spec: Any
+    result: Any, layout: DataLayout, job_id: str, fmu: Path, experiments: list[Any], spec: Any
 ) -> None:
-    """Write the job's HTML report to ``directory`` (or ``<directory>.error`` saying why not).
+    """Write a job's HTML report (or its error file saying why not).
 
-    It is drawn in ``<directory>.tmp`` (the marker made by whoever started the drawing) and
-    renamed to ``directory``.
+    It is drawn in the job's report marker (made by whoever started the drawing) and renamed
+    to the job's report folder.
     """
-    tmp = directory.with_name(directory.name + ".tmp")
-    error_file = directory.with_name(directory.name + ".error")
+    directory, tmp = layout.report(job_id), layout.report_marker(job_id)
+    error_file = layout.report_error(job_id)
     try:
         from fmuid.report import write_report as report
 
         report(result, tmp, fmu=fmu, experiments=experiments, spec=spec)
     except Exception as exc:  # a failed report must not fail a finished job
-        logger.exception("report of %s failed", directory.name)
+        logger.exception("report of %s failed", job_id)
         shutil.rmtree(tmp, ignore_errors=True)
         with contextlib.suppress(OSError):
             error_file.write_text(f"{type(exc).__name__}: {exc}")
@@ -104,8 +63,10 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
     """
     from fmuid.data import load_experiment, spec_from_json
     from fmuid.jobs.run import limit_process, stage_inputs
+    from fmuid.results import result_from_dict
 
-    directory, tmp, error_file = report_paths(data_dir, job_id)
+    layout = DataLayout(data_dir)
+    tmp, error_file = layout.report_marker(job_id), layout.report_error(job_id)
     logger.info("drawing the report of job %s", job_id)
     try:
         limit_process(memory_mb)
@@ -123,8 +84,8 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
                 experiments: list[Any] = [load_space(data[0])]
             else:
                 experiments = [load_experiment(path) for path in data]
-            result = _stored_result(text, data_dir, job_id)
-            write_report(result, directory, fmu, experiments, spec)
+            result = result_from_dict(json.loads(text))
+            write_report(result, layout, job_id, fmu, experiments, spec)
     except Exception as exc:  # reading the job back failed: say why, the job stays done
         logger.exception("report of %s failed", job_id)
         shutil.rmtree(tmp, ignore_errors=True)
@@ -138,9 +99,7 @@ def forked_drawing(arguments: tuple[Path, Path, str, int], work: Path, service_p
     die_with_pool_owner(service_pid)
     os.nice(JOB_NICENESS)
     _, data_dir, job_id, _ = arguments
-    log = os.open(
-        data_dir / "logs" / f"{job_id}.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644
-    )
+    log = os.open(DataLayout(data_dir).log(job_id), os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
     os.dup2(log, 2)
     os.close(log)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")

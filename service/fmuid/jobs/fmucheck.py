@@ -22,9 +22,9 @@ import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 import zlib
-from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
+from fmuid.data.limits import FmuLimits
 from fmuid.errors import FmuError
 from fmuid.model.fmu import FmuModel
 
@@ -32,32 +32,6 @@ MAX_MEMBERS = 10_000
 MAX_RATIO = 200
 """Largest accepted compression ratio of one member bigger than 1 MiB (zip-bomb guard)."""
 MODEL_DESCRIPTION = "modelDescription.xml"
-
-
-@dataclass(frozen=True)
-class FmuLimits:
-    """Limits of the checks of an uploaded FMU (each a ``FMUID_<NAME>`` service setting).
-
-    Attributes
-    ----------
-    max_fmu_unpacked_bytes
-        Sum of the members' unpacked sizes [bytes].
-    max_model_description_bytes
-        Unpacked size of ``modelDescription.xml`` [bytes].
-    max_model_variables
-        Variables listed in ``modelDescription.xml``.
-    probe_timeout_s
-        Wall-clock time the binary may take to load [s].
-    probe_memory_mb
-        Address space of the process that loads the binary [MiB].
-
-    """
-
-    max_fmu_unpacked_bytes: int = 200 * 1024 * 1024
-    max_model_description_bytes: int = 32 * 1024 * 1024
-    max_model_variables: int = 100_000
-    probe_timeout_s: float = 10.0
-    probe_memory_mb: int = 1024
 
 
 def check_archive(path: Path, name: str, limits: FmuLimits) -> None:

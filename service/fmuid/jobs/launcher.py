@@ -175,8 +175,9 @@ class WarmServer:
             self._live = [p for p in self._live if not p.exited()]
             if self._forked >= self.recycle_after and not self._live:
                 logger.info("warm server replaced after %d processes", self._forked)
-                _stop_server()
-            if _server_pid() is None or not is_alive(_server_pid() or 0):
+                _forkserver(stop=True)
+            server_pid = _forkserver()
+            if server_pid is None or not is_alive(server_pid):
                 self._forked = 0
             os.environ[JOB_DB_ENV] = str(self.db_path)  # inherited by the server when it starts
             os.environ[POOL_PARENT_ENV] = str(os.getpid())
@@ -186,11 +187,11 @@ class WarmServer:
                 process = self._start(target, args, name)
             except (OSError, EOFError) as exc:  # the server died while forking
                 logger.warning("warm server failed to fork (%s); starting a new one", exc)
-                _stop_server()
+                _forkserver(stop=True)
                 self._forked = 0
                 process = self._start(target, args, name)
             self._forked += 1
-            warm = WarmProcess(process, _server_pid())
+            warm = WarmProcess(process, _forkserver())
             self._live.append(warm)
             return warm
 
@@ -200,18 +201,25 @@ class WarmServer:
         return process
 
 
-def _server_pid() -> int | None:
-    pid: int | None = forkserver._forkserver._forkserver_pid  # type: ignore[attr-defined]
+def _forkserver(stop: bool = False) -> int | None:
+    """Return the pid of multiprocessing's forkserver, or ``None`` when none has started.
+
+    With ``stop``, stop the server first (dead or alive), so that the next fork starts a new
+    one, and return ``None``. This is the one place that reaches into multiprocessing's
+    private state: its forkserver is a module-global ``ForkServer`` whose public functions
+    (``ensure_running``, ``set_forkserver_preload``, ``connect_to_new_process``) neither give
+    its pid nor stop it (Python 3.11 to 3.13), and ``Process.start`` of the "forkserver"
+    context uses that global, so a server of our own would not serve its processes.
+    """
+    server: Any = forkserver._forkserver  # type: ignore[attr-defined]
+    if stop:
+        try:
+            server._stop()
+        except (OSError, TypeError):  # it died: its socket or alive pipe is gone already
+            server._forkserver_pid = server._forkserver_alive_fd = None
+            server._forkserver_address = None
+    pid: int | None = server._forkserver_pid
     return pid
-
-
-def _stop_server() -> None:
-    """Stop the forkserver (dead or alive) so that the next fork starts a new one."""
-    try:
-        forkserver._forkserver._stop()  # type: ignore[attr-defined]
-    except (OSError, TypeError):  # it died: its socket or alive pipe is gone already
-        server: Any = forkserver._forkserver  # type: ignore[attr-defined]
-        server._forkserver_pid = server._forkserver_alive_fd = server._forkserver_address = None
 
 
 def forked_job(launch: Launch, service_pid: int) -> None:

@@ -1,10 +1,22 @@
-"""The rows of the job store as values: :class:`Job` and its :class:`Dataset` files."""
+"""The rows of the job store as values: :class:`Job` and its :class:`Dataset` files.
+
+The job kinds are :data:`Kind` and the states :data:`Status`, written here once.
+"""
 
 from __future__ import annotations
 
 import json
 import sqlite3
 from dataclasses import dataclass
+from typing import Literal, get_args
+
+Kind = Literal["fit", "profile", "diagnose", "design"]
+"""What a job computes."""
+KINDS: tuple[Kind, ...] = get_args(Kind)
+Status = Literal["queued", "running", "done", "failed", "cancelled"]
+"""Where a job is: waiting, running, or one of the final states."""
+STATUSES: tuple[Status, ...] = get_args(Status)
+FINAL_STATUSES: tuple[Status, ...] = ("done", "failed", "cancelled")
 
 
 @dataclass(frozen=True)
@@ -24,9 +36,9 @@ class Job:
     id
         A UUID4 string.
     kind
-        ``"fit"``, ``"profile"`` or ``"diagnose"``.
+        One of :data:`KINDS`.
     status
-        ``"queued"``, ``"running"``, ``"done"``, ``"failed"`` or ``"cancelled"``.
+        One of :data:`STATUSES`.
     created, started, finished
         Unix times [s]; ``started``/``finished`` are ``None`` until they happen.
     progress_done, progress_total, progress_stage
@@ -47,8 +59,8 @@ class Job:
     """
 
     id: str
-    kind: str
-    status: str
+    kind: Kind
+    status: Status
     created: float
     started: float | None
     finished: float | None

@@ -36,8 +36,6 @@ from typing import Any
 
 from fmuid.errors import FmuidError
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
-from fmuid.jobs.draw import keep_result
-from fmuid.jobs.housekeeping import checkpoint_dir
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -109,7 +107,7 @@ def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[P
     because dask workers open it by path: on other machines they see it when the data folder is
     shared (the compose file mounts the same volume).
     """
-    fmu_dir = store.blob_dir.parent / "fmus" / job.fmu_sha256
+    fmu_dir = store.layout.fmu_dir(job.fmu_sha256)
     fmu_dir.mkdir(parents=True, exist_ok=True)
     fmu = fmu_dir / (re.sub(r"[^A-Za-z0-9_-]", "_", job.model_name)[:100] + ".fmu")
     if not fmu.exists():
@@ -173,7 +171,7 @@ def run_job(store: JobStore, job: Job, memory_mb: int, dask: str | None) -> int:
     progress = ProgressWriter(store, job.id)
     # a design keeps its finished evaluations here until the job has an outcome: a job
     # re-run after a restart of the service resumes from them
-    checkpoint = checkpoint_dir(store.blob_dir.parent, job.id)
+    checkpoint = store.layout.checkpoint(job.id)
     with (
         tempfile.TemporaryDirectory(prefix=f"fmuid-job-{job.id[:8]}-") as tmp,
         _removed_after(checkpoint),
@@ -219,11 +217,6 @@ def run_job(store: JobStore, job: Job, memory_mb: int, dask: str | None) -> int:
             return 1
         if not stored:
             logger.info("job %s was cancelled before it finished", job.id)
-            return 0
-        try:
-            keep_result(result, result_json, store.blob_dir.parent, job.id)
-        except Exception:  # the result is stored; only its report will be missing
-            logger.exception("job %s: could not keep the result object for its report", job.id)
     return 0
 
 

@@ -4,7 +4,9 @@ One SQLite file (WAL mode) holds the jobs table and the results; every thread an
 its own connection and keeps transactions short, so the API process, its supervisor thread and
 the job processes can share the file. Uploaded FMUs and CSV files live in
 ``<data_dir>/blobs/<sha256>``, written through a temporary file and ``os.replace`` so that a
-crash never leaves half a file under a final name.
+crash never leaves half a file under a final name. Where each file lives is
+:class:`fmuid.jobs.layout.DataLayout`; putting jobs back in the queue after a lost process or a
+restart is :mod:`fmuid.jobs.restarts`.
 """
 
 from __future__ import annotations
@@ -23,17 +25,12 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import ParamSpec, TypeVar
 
-from fmuid.jobs.records import Dataset, Job
+from fmuid.jobs.layout import DataLayout
+from fmuid.jobs.records import FINAL_STATUSES, STATUSES, Dataset, Job, Kind
 
-__all__ = ["Dataset", "Job", "JobStore", "QueueFull", "StoreError", "retried"]
+__all__ = ["FINAL_STATUSES", "Dataset", "Job", "JobStore", "QueueFull", "StoreError", "retried"]
 
 logger = logging.getLogger(__name__)
-
-KINDS = ("fit", "profile", "diagnose")
-STATUSES = ("queued", "running", "done", "failed", "cancelled")
-FINAL_STATUSES = ("done", "failed", "cancelled")
-MAX_ATTEMPTS = 3
-"""A job interrupted by this many service restarts is failed instead of queued again."""
 
 WRITE_ATTEMPTS = 4
 """A write that fails this many times (locked, I/O error, disk full) raises :class:`StoreError`."""
@@ -122,7 +119,8 @@ class JobStore:
     db_path
         The SQLite file; created with its tables when missing.
     data_dir
-        Folder of ``blobs/``; created when missing.
+        The data folder (:class:`~fmuid.jobs.layout.DataLayout`); its ``blobs/`` and
+        ``tmp/`` are created when missing.
     max_queued
         :meth:`create` raises :class:`QueueFull` when this many jobs are queued already.
 
@@ -131,12 +129,12 @@ class JobStore:
     def __init__(self, db_path: Path, data_dir: Path, max_queued: int | None = None):
         self.db_path = Path(db_path)
         self.max_queued = max_queued
-        self.blob_dir = Path(data_dir) / "blobs"
-        self.blob_dir.mkdir(parents=True, exist_ok=True)
-        self.tmp_dir().mkdir(exist_ok=True)
+        self.layout = DataLayout(Path(data_dir))
+        self.layout.blobs.mkdir(parents=True, exist_ok=True)
+        self.layout.uploads.mkdir(exist_ok=True)
         self.db_path.parent.mkdir(parents=True, exist_ok=True)
         self._local = threading.local()
-        self.reserve = Path(data_dir) / "reserve"
+        self.reserve = self.layout.reserve
         try:
             self._connection().executescript(_SCHEMA)
         except sqlite3.DatabaseError as exc:  # the service still starts, and says so in health
@@ -206,23 +204,23 @@ class JobStore:
             while chunk := stream.read(1 << 20):
                 digest.update(chunk)
         sha = digest.hexdigest()
-        os.replace(path, self.blob_dir / sha)
+        os.replace(path, self.layout.blob(sha))
         return sha
 
     def tmp_dir(self) -> Path:
         """Return the folder for uploads being checked (beside the blobs, same file system)."""
-        return self.blob_dir.parent / "tmp"
+        return self.layout.uploads
 
     def blob_path(self, sha256: str) -> Path:
-        """Return the file of a blob (which exists once :meth:`put_blob` returned its hash)."""
-        return self.blob_dir / sha256
+        """Return the file of a blob (which exists once :meth:`add_file` returned its hash)."""
+        return self.layout.blob(sha256)
 
     # -- jobs --------------------------------------------------------------------------------
 
     @retried
     def create(
         self,
-        kind: str,
+        kind: Kind,
         spec: str,
         fmu_sha256: str,
         model_name: str,
@@ -277,7 +275,7 @@ class JobStore:
     def counts(self) -> dict[str, int]:
         """Return the number of jobs per status (every status present, zeros included)."""
         rows = self._connection().execute("SELECT status, COUNT(*) FROM jobs GROUP BY status")
-        counts = dict.fromkeys(STATUSES, 0)
+        counts: dict[str, int] = dict.fromkeys(STATUSES, 0)
         counts.update({status: n for status, n in rows})
         return counts
 
@@ -357,28 +355,6 @@ class JobStore:
             )
         return cur.rowcount > 0
 
-    @retried
-    def requeue(self, job_id: str, reason: str) -> bool:
-        """Put a running job whose process was lost through no fault of its own back in the queue.
-
-        A job started :data:`MAX_ATTEMPTS` times already is failed with ``reason`` instead.
-        Returns whether the job was queued again.
-        """
-        with self.transaction() as conn:
-            cur = conn.execute(
-                "UPDATE jobs SET status = 'queued', pid = NULL, started = NULL"
-                " WHERE id = ? AND status = 'running' AND attempts < ?",
-                (job_id, MAX_ATTEMPTS),
-            )
-            if cur.rowcount:
-                return True
-            conn.execute(
-                "UPDATE jobs SET status = 'failed', error = ?, finished = ?, pid = NULL"
-                " WHERE id = ? AND status = 'running'",
-                (f"{reason} ({MAX_ATTEMPTS} attempts); not retried", time.time(), job_id),
-            )
-        return False
-
     def result(self, job_id: str) -> str | None:
         """Return the result JSON text of a done job, or ``None``."""
         row = (
@@ -387,30 +363,3 @@ class JobStore:
             .fetchone()
         )
         return row[0] if row else None
-
-    @retried
-    def recover(self) -> list[Job]:
-        """Put jobs left running by a stopped service back in the queue.
-
-        A job that has already been started :data:`MAX_ATTEMPTS` times is failed with the
-        reason instead, so that an input that kills the service cannot loop forever.
-
-        Returns
-        -------
-        list of Job
-            The jobs as they were found (status ``running``), with the pid of their process.
-
-        """
-        with self.transaction() as conn:
-            rows = conn.execute("SELECT * FROM jobs WHERE status = 'running'").fetchall()
-            conn.execute(
-                "UPDATE jobs SET status = 'failed', finished = ?, pid = NULL, error ="
-                " 'interrupted by a restart of the service ' || attempts || ' times; not retried'"
-                " WHERE status = 'running' AND attempts >= ?",
-                (time.time(), MAX_ATTEMPTS),
-            )
-            conn.execute(
-                "UPDATE jobs SET status = 'queued', pid = NULL, started = NULL"
-                " WHERE status = 'running'"
-            )
-        return [Job.from_row(r) for r in rows]

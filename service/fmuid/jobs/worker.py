@@ -1,8 +1,8 @@
 """The supervisor: a thread in the service that runs queued jobs, each in its own process.
 
 Every job runs in a job process (:mod:`fmuid.jobs.run`, started as :mod:`fmuid.jobs.proc` says)
-in a new session (its own process group), with its stderr in ``<data_dir>/logs/<job id>.log`` and
-its temporary files in :func:`fmuid.jobs.housekeeping.job_tmp_dir`. The supervisor keeps at most
+in a new session (its own process group), with its stderr in its log and its temporary files in
+its own folder (:class:`fmuid.jobs.layout.DataLayout`). The supervisor keeps at most
 ``settings.workers`` of them alive, kills a group past ``settings.job_timeout_s`` or when its job
 is cancelled, and, when a process ends without recording an outcome (a segfault, the OOM killer),
 fails its job with the reason read from the exit status and the log; when the store cannot take
@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fmuid.jobs import housekeeping as hk
+from fmuid.jobs import restarts
 from fmuid.jobs.crash import exit_message
 from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmProcess, WarmServer
 from fmuid.jobs.proc import end_processes, find_job_processes, kill_group
@@ -61,8 +62,8 @@ class Supervisor:
     def __init__(self, settings: Settings, store: JobStore):
         self.settings = settings
         self.store = store
-        self.log_dir = settings.data_dir / "logs"
-        self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.layout = store.layout
+        self.layout.logs.mkdir(parents=True, exist_ok=True)
         self._running: dict[str, _Running] = {}
         self._lock = threading.Lock()
         self._wake = threading.Event()
@@ -99,7 +100,7 @@ class Supervisor:
         """
         try:
             self._recover()
-        except hk.LeaseHeld:
+        except restarts.LeaseHeld:
             raise
         except (StoreError, sqlite3.Error):
             logger.exception("cannot recover the jobs of %s yet", self.settings.database)
@@ -107,7 +108,7 @@ class Supervisor:
         self._thread.start()
 
     def _recover(self) -> None:
-        hk.take_lease(self.store)
+        restarts.take_lease(self.store)
         self._renewed = time.monotonic()
         leftovers = find_job_processes(self.settings.database)
         if leftovers:
@@ -115,10 +116,10 @@ class Supervisor:
             stuck = end_processes(leftovers)
             if stuck:
                 logger.error("processes of a previous run would not die: %s", stuck)
-        for job in self.store.recover():
+        for job in restarts.recover(self.store):
             logger.info("job %s was running when the service stopped: queued again", job.id)
-        hk.remove_orphans(self.store, self.settings.data_dir, alive=set())
-        for partial in (self.settings.data_dir / "reports").glob("*.tmp"):
+        hk.remove_orphans(self.store, alive=set())
+        for partial in self.layout.reports.glob("*.tmp"):
             hk.remove_paths([partial])
         self._recovered = True
 
@@ -135,10 +136,10 @@ class Supervisor:
             for run in self._running.values():
                 kill_group(run.process.pid)
                 run.process.wait()
-                hk.remove_paths([hk.job_tmp_dir(self.settings.data_dir, run.job.id)])
+                hk.remove_paths([self.layout.job_tmp(run.job.id)])
             self._running.clear()
         try:
-            hk.release_lease(self.store)
+            restarts.release_lease(self.store)
         except StoreError:
             logger.exception("could not release the lease of the job store")
 
@@ -181,7 +182,7 @@ class Supervisor:
     def _housekeeping(self) -> None:
         now = time.monotonic()
         if now - self._renewed > LEASE_RENEW_S:
-            hk.renew_lease(self.store)
+            restarts.renew_lease(self.store)
             self._renewed = now
         retention = self.settings.retention_s
         interval = min(MAINTENANCE_S, retention / 4) if retention > 0 else MAINTENANCE_S
@@ -190,12 +191,12 @@ class Supervisor:
         self._maintained = now
         if retention > 0:
             expired = hk.expired_jobs(self.store, retention)
-            for job_id in hk.delete_jobs(self.store, self.settings.data_dir, expired):
+            for job_id in hk.delete_jobs(self.store, expired):
                 logger.info("job %s removed by retention (FMUID_RETENTION_S)", job_id)
         with self._lock:
             alive = set(self._running)
-        hk.remove_orphans(self.store, self.settings.data_dir, alive)
-        hk.remove_unused_blobs(self.store, self.settings.data_dir)
+        hk.remove_orphans(self.store, alive)
+        hk.remove_unused_blobs(self.store)
         self.store.keep_reserve()
 
     def _spawn(self, job: Job) -> None:
@@ -211,8 +212,8 @@ class Supervisor:
         ]
         if self.settings.dask_scheduler:
             args += ["--dask-scheduler", self.settings.dask_scheduler]
-        log_path = self.log_dir / f"{job.id}.log"
-        tmp = hk.job_tmp_dir(self.settings.data_dir, job.id)
+        log_path = self.layout.log(job.id)
+        tmp = self.layout.job_tmp(job.id)
         launch = Launch(job.id, args, log_path, tmp, self.settings.database)
         try:
             tmp.mkdir(parents=True, exist_ok=True)
@@ -264,14 +265,14 @@ class Supervisor:
         for run in ended:
             kill_group(run.process.pid)  # pool workers the job left behind, before pid reuse
             returncode = run.process.wait()
-            hk.remove_paths([hk.job_tmp_dir(self.settings.data_dir, run.job.id)])
+            hk.remove_paths([self.layout.job_tmp(run.job.id)])
             logger.info("job %s process ended with status %s", run.job.id, returncode)
             job = self.store.get(run.job.id)
             if job is None or job.status != "running":
                 continue
             if isinstance(run.process, WarmProcess) and run.process.server_died():
                 reason = "its process died with the warm server that forked it"
-                queued = self.store.requeue(job.id, reason)
+                queued = restarts.requeue(self.store, job.id, reason)
                 outcome = "queued again" if queued else "failed"
                 logger.warning("job %s: %s; %s", job.id, reason, outcome)
                 continue

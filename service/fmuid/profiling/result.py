@@ -201,10 +201,32 @@ class ProfileResult:
         }
 
     def to_frame(self) -> Any:
-        """Return a pandas table: estimate, both intervals, label and unit per parameter."""
-        from fmuid.results import to_frame
+        """Return a pandas table: estimate, both intervals, label and unit per parameter.
 
-        return to_frame(self)
+        Columns: ``estimate``, ``unit``, ``ci_low``, ``ci_high`` (simultaneous), ``pw_low``,
+        ``pw_high`` (pointwise; open ends are NaN), ``status``, ``limited_by``, ``lower``,
+        ``upper``, ``scale``.
+        """
+        from fmuid.frames import nan_if_none, parameter_frame
+
+        return parameter_frame(
+            {
+                n: {
+                    "estimate": p.estimate,
+                    "unit": self.fit.units.get(n, ""),
+                    "ci_low": nan_if_none(p.ci_simultaneous[0]),
+                    "ci_high": nan_if_none(p.ci_simultaneous[1]),
+                    "pw_low": nan_if_none(p.ci_pointwise[0]),
+                    "pw_high": nan_if_none(p.ci_pointwise[1]),
+                    "status": p.status,
+                    "limited_by": ", ".join(p.limited_by),
+                    "lower": p.lower,
+                    "upper": p.upper,
+                    "scale": p.scale,
+                }
+                for n, p in self.parameters.items()
+            }
+        )
 
 
 def _num(v: float | None) -> float | None:

@@ -17,7 +17,7 @@ from fmuid.api.deps import (
 )
 from fmuid.api.forms import FormOffLoop
 from fmuid.api.results import ResultOut
-from fmuid.api.schemas import ErrorOut, JobCreated, JobList, JobOut, Kind
+from fmuid.api.schemas import UNAUTHORIZED, ErrorOut, JobCreated, JobList, JobOut, Kind
 from fmuid.api.submission import SubmissionError, Upload, submit
 from fmuid.api.vetting import PoolBusy, VettingPool
 from fmuid.jobs.health import StoreHealth
@@ -31,7 +31,7 @@ router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=FormOffLoop)
 SQLITE_MAX_INT = 2**63 - 1  # larger integers overflow SQLite's OFFSET (found by schemathesis)
 
 _ERRORS: dict[int | str, dict[str, Any]] = {
-    401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
+    401: UNAUTHORIZED,
     404: {"model": ErrorOut, "description": "No job with this id."},
 }
 
@@ -156,7 +156,6 @@ def cancel_or_remove_job(
     job: Annotated[Job, Depends(get_job)],
     store: Annotated[JobStore, Depends(get_store)],
     supervisor: Annotated[Supervisor, Depends(get_supervisor)],
-    settings: Annotated[Settings, Depends(get_settings)],
 ) -> JobOut:
     """Cancel a queued or running job (its process is killed at once); remove a finished one.
 
@@ -164,7 +163,7 @@ def cancel_or_remove_job(
     uploads no other job uses; the answer is its last state, and it is 404 afterwards.
     """
     if job.status in FINAL_STATUSES:
-        delete_jobs(store, settings.data_dir, [job.id])
+        delete_jobs(store, [job.id])
         return JobOut.from_job(job)
     if store.cancel(job.id):
         supervisor.cancel(job.id)

@@ -19,7 +19,7 @@ from fastapi.responses import FileResponse, HTMLResponse
 from fmuid.api.auth import sign
 from fmuid.api.deps import get_drawer, get_job, get_settings
 from fmuid.api.drawing import DrawingFailed, ReportDrawer
-from fmuid.api.schemas import ErrorOut
+from fmuid.api.schemas import UNAUTHORIZED, ErrorOut
 from fmuid.jobs.store import Job
 from fmuid.settings import Settings
 
@@ -31,7 +31,7 @@ _LINK = re.compile(r'\b(src|href)="([A-Za-z0-9_][A-Za-z0-9_.-]*)"')
 MAX_FILE_NAME = 255
 """Longest file name the file system takes; a longer one is simply not in the report."""
 _RESPONSES: dict[int | str, dict[str, Any]] = {
-    401: {"model": ErrorOut, "description": "Missing or wrong bearer token."},
+    401: UNAUTHORIZED,
     404: {"model": ErrorOut, "description": "No such job or file."},
     409: {"model": ErrorOut, "description": "The job is not done."},
     503: {"model": ErrorOut, "description": "The report could not be drawn (the cause)."},
