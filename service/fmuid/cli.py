@@ -123,65 +123,25 @@ def _spec_interface(path: Path) -> str:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
+    import fmuid
     from fmuid.data import load_experiment
-    from fmuid.estimation.predictor import merged_inputs
-    from fmuid.model.fmu import USABLE, FmuModel
-    from fmuid.model.simulator import Simulator
 
-    fmu = _fmu_path(args.fmu)
     experiment = load_experiment(args.data)
     params = _simulation_values(Path(args.spec)) if args.spec else {}
     interface = args.interface or (_spec_interface(Path(args.spec)) if args.spec else "auto")
-    model = FmuModel(fmu, interface)
-    unknown = sorted(set(params) - set(model.parameters))
-    if unknown:
-        raise SpecError(f"{args.spec}: the FMU has no parameter(s) {', '.join(unknown)}")
-    problems = model.usage_problems((), params, (), ())
-    if problems:
-        raise SpecError("\n".join(f"{args.spec}: {problem}" for problem in problems))
-    unknown_cols = [
-        c
-        for c in experiment.columns
-        if c not in model.inputs
-        and c not in model.outputs
-        and not (c.startswith("sigma_") and c[6:] in model.outputs)
-    ]
-    if unknown_cols:
-        raise DataError(
-            f"{experiment.name}: column(s) {', '.join(unknown_cols)} are not FMU variables"
-        )
-    inputs = [c for c in experiment.columns if c in model.inputs]
-    held = [c for c in inputs if not model.inputs[c].is_continuous]
-    input_time, input_values = merged_inputs(experiment, inputs, held)
-    outputs = [n for n, v in model.outputs.items() if v.kind in USABLE["output"]]
-    if not outputs:
-        types = ", ".join(f"{n} ({v.type_label})" for n, v in model.outputs.items()) or "none"
-        raise FmuError(f"{fmu}: no output fmuid can read (its outputs: {types})")
-    simulator = Simulator(fmu, interface)
-    y = simulator.simulate(params, input_time, input_values, experiment.time, outputs)
-    log.info("%s; %s", model.kind_label, simulator.input_handling)
-    columns, header = [experiment.time], ["time"]
-    if args.with_inputs:
-        for name in inputs:
-            columns.append(_input_at(experiment.time, input_time, input_values[name], name in held))
-            header.append(name)
+    run = fmuid.simulate(
+        _fmu_path(args.fmu), experiment, params, interface=interface, source=str(args.spec)
+    )
+    log.info("%s; %s", run.model.kind_label, run.input_handling)
+    columns = {"time": run.time, **(run.inputs if args.with_inputs else {}), **run.outputs}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    table = np.column_stack([*columns, y])
     np.savetxt(
-        out, table, delimiter=",", header=",".join([*header, *outputs]), comments="", fmt="%.12g"
-    )
+        out, np.column_stack(list(columns.values())), delimiter=",", header=",".join(columns),
+        comments="", fmt="%.12g",
+    )  # fmt: skip
     print(out)  # noqa: T201
     return EXIT_OK
-
-
-def _input_at(time: Any, input_time: Any, values: Any, held: bool) -> Any:
-    """Return an input at ``time`` as the FMU sees it: linear between samples, or held."""
-    import numpy as np
-
-    if held:
-        return values[np.searchsorted(input_time, time, side="right") - 1]
-    return np.interp(time, input_time, values)
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:

@@ -69,9 +69,7 @@ class Problem:
             }
         )
         self.inputs = inputs
-        self.predictor: Predictor = predictor or FmuPredictor(
-            self.fmu_path, spec.fixed, inputs, spec.interface
-        )
+        self.predictor: Predictor = predictor or FmuPredictor(self.model, spec.fixed, inputs)
         self.masks = [
             [
                 exp.output_mask(o) if o in exp.columns else np.zeros(exp.n_rows, bool)

@@ -28,7 +28,7 @@ from fmuid.errors import FmuError
 from fmuid.model.channels import Channels
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
-from fmuid.model.fmu import INTERFACES, USABLE, FmuModel, Variable
+from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan, make_plan
 
@@ -44,26 +44,36 @@ PLAN_CACHE = 32
 """Run plans kept per simulator (one per experiment of a study, typically)."""
 
 
+def as_model(fmu: FmuModel | str | Path, interface: str | None = None) -> FmuModel:
+    """Return ``fmu`` driving ``interface`` (None: as it is), parsing it only if it is a path."""
+    if isinstance(fmu, FmuModel):
+        return fmu if interface is None else fmu.with_interface(interface)
+    return FmuModel(fmu, interface)
+
+
 class SimulatorBase:
     """What every simulator of an FMU has: the parsed FMU and how inputs reach it.
 
     Parameters
     ----------
-    path
-        The ``.fmu`` file.
+    fmu
+        The parsed FMU (:class:`FmuModel`), or a ``.fmu`` file to parse.
     interface
-        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"``/None (as :class:`FmuModel`).
+        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"`` (as :class:`FmuModel`); None:
+        the model's own (for a file: auto).
     input_step
         Longest sub-step [s] for co-simulation FMUs without input derivatives.
 
     """
 
     def __init__(
-        self, path: str | Path, interface: str | None = None, input_step: float = INPUT_STEP
+        self,
+        fmu: FmuModel | str | Path,
+        interface: str | None = None,
+        input_step: float = INPUT_STEP,
     ) -> None:
-        self.model = FmuModel(path, interface)
+        self.model = as_model(fmu, interface)
         self.path = self.model.path
-        self.interface = interface
         self.input_step = float(input_step)
 
     @property
@@ -82,7 +92,7 @@ class Simulator(SimulatorBase):
 
     Parameters
     ----------
-    path, interface, input_step
+    fmu, interface, input_step
         As for :class:`SimulatorBase`.
     reset_reliable
         False: give every run a fresh instance without checking the reset; None: check it on
@@ -104,12 +114,12 @@ class Simulator(SimulatorBase):
 
     def __init__(
         self,
-        path: str | Path,
+        fmu: FmuModel | str | Path,
         interface: str | None = None,
         input_step: float = INPUT_STEP,
         reset_reliable: bool | None = None,
     ) -> None:
-        super().__init__(path, interface, input_step)
+        super().__init__(fmu, interface, input_step)
         self._unzip_dir = tempfile.mkdtemp(prefix="fmuid-fmu-")
         self._cleanup = weakref.finalize(self, _remove_tree, self._unzip_dir, os.getpid())
         fmpy.extract(str(self.path), unzipdir=self._unzip_dir)
@@ -319,33 +329,22 @@ def _remove_tree(path: str, owner: int) -> None:
         shutil.rmtree(path, ignore_errors=True)
 
 
-_CACHE: dict[tuple[str, str | None, int, int], Simulator | HostedSimulator] = {}
+_CACHE: dict[tuple[tuple[str, str, str], int], Simulator | HostedSimulator] = {}
 _CACHE_PID = os.getpid()
-_ALIASES: dict[str, Path] = {}
-_UNRELIABLE: set[tuple[str, str | None]] = set()
+_UNRELIABLE: set[tuple[str, str, str]] = set()
 
 
-def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
-    """Make :func:`get_simulator` open ``local_copy`` whenever it is asked for ``path``.
-
-    Used on remote workers (dask) that do not see the submitting machine's files: the FMU's
-    bytes travel with the work and are written to a local file once.
-    """
-    _ALIASES[str(path)] = local_copy
-
-
-def mark_reset_unreliable(path: str | Path, interface: str | None = None) -> None:
+def mark_reset_unreliable(model: FmuModel) -> None:
     """Record that the FMU's reset is unreliable: :func:`get_simulator` hosts it from now on.
 
     The record holds in this process and in the worker processes it forks later.
     """
-    resolved = _ALIASES.get(str(path), Path(path)).resolve()
-    _UNRELIABLE.add((str(resolved), INTERFACES.get(interface, interface)))
+    _UNRELIABLE.add(model.key)
 
 
-def fmu_summary(path: str | Path, interface: str | None = None) -> dict[str, str]:
-    """Say how fmuid runs the FMU at ``path``: FMI version, interface, input handling, reset."""
-    simulator = get_simulator(path, interface)
+def fmu_summary(fmu: FmuModel | str | Path, interface: str | None = None) -> dict[str, str]:
+    """Say how fmuid runs the FMU: FMI version, interface, input handling, reset."""
+    simulator = get_simulator(fmu, interface)
     return {
         "fmi_version": simulator.model.fmi_version,
         "interface": simulator.model.interface,
@@ -354,18 +353,21 @@ def fmu_summary(path: str | Path, interface: str | None = None) -> dict[str, str
     }
 
 
-def get_simulator(path: str | Path, interface: str | None = None) -> Simulator | HostedSimulator:
-    """Return this thread's simulator for ``path``, creating it on first use.
+def get_simulator(
+    fmu: FmuModel | str | Path, interface: str | None = None
+) -> Simulator | HostedSimulator:
+    """Return this thread's simulator of the FMU, creating it on first use.
 
     FMU instances are not thread-safe, so each thread of a process (e.g. a dask worker with
-    several threads) gets its own. The cache key is the resolved path, the interface, the
-    file's modification time and the thread, so a rebuilt FMU gets a fresh simulator (the old
-    one is closed). A forked child starts with an empty cache. An FMU whose reset was found
+    several threads) gets its own. The cache key is the model's :attr:`~FmuModel.key` (its
+    checksum, file and interface) and the thread, so a rebuilt FMU gets a fresh simulator (the
+    old one is closed). A forked child starts with an empty cache. An FMU whose reset was found
     unreliable (by the simulator's first run or by :func:`mark_reset_unreliable`) gets a
     :class:`~fmuid.model.host.HostedSimulator`: a fresh instance per run, in a process replaced
     every ``FMUID_RECYCLE_RUNS`` runs.
 
-    ``path`` and ``interface`` are as for :class:`SimulatorBase`.
+    ``fmu`` and ``interface`` are as for :class:`SimulatorBase`; hand on the parsed model
+    (a file is parsed on every call).
     """
     from fmuid.model.host import HostedSimulator  # host imports this module
 
@@ -373,25 +375,21 @@ def get_simulator(path: str | Path, interface: str | None = None) -> Simulator |
     if _CACHE_PID != os.getpid():
         _CACHE.clear()
         _CACHE_PID = os.getpid()
-    resolved = _ALIASES.get(str(path), Path(path)).resolve()
-    try:
-        mtime = resolved.stat().st_mtime_ns
-    except OSError as exc:
-        raise FmuError(f"FMU {path} does not exist") from exc
+    model = as_model(fmu, interface)
     thread = threading.get_ident()
-    wanted = INTERFACES.get(interface, interface)  # FMI's name; None: auto
-    key = (str(resolved), wanted, mtime, thread)
+    key = (model.key, thread)
     simulator = _CACHE.get(key)
     if isinstance(simulator, Simulator) and (
-        simulator.reset_reliable is False or key[:2] in _UNRELIABLE
+        simulator.reset_reliable is False or model.key in _UNRELIABLE
     ):
-        mark_reset_unreliable(resolved, wanted)
+        mark_reset_unreliable(model)
         _CACHE.pop(key).close()
         simulator = None
     if simulator is None:
-        for old_key in [k for k in _CACHE if k[:2] == key[:2] and k[3] == thread]:
-            _CACHE.pop(old_key).close()
-        hosted = (str(resolved), wanted) in _UNRELIABLE
-        simulator = (HostedSimulator if hosted else Simulator)(resolved, wanted)
+        _, path, wanted = model.key
+        for old in [k for k in _CACHE if k[0][1:] == (path, wanted) and k[1] == thread]:
+            _CACHE.pop(old).close()
+        hosted = model.key in _UNRELIABLE
+        simulator = (HostedSimulator if hosted else Simulator)(model)
         _CACHE[key] = simulator
     return simulator
