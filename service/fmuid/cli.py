@@ -38,8 +38,11 @@ def _write_json(path: Path, payload: dict[str, Any]) -> None:
     tmp.replace(path)
 
 
-def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
+def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any, Any]:
+    """Return the FMU, experiments and spec of a study, and the problem built of them."""
     from fmuid.data import load_experiment, load_spec
+    from fmuid.formats.cli import apply_start
+    from fmuid.stages import make_problem
 
     fmu = _fmu_path(args.fmu)
     experiments = [load_experiment(p) for p in args.data]
@@ -49,9 +52,8 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
     spec = load_spec(Path(args.spec))
     if args.interface:
         spec = spec.model_copy(update={"interface": args.interface})
-    from fmuid.formats.cli import apply_start
-
-    return fmu, experiments, apply_start(spec, args.start)
+    spec = apply_start(spec, args.start)
+    return fmu, experiments, spec, make_problem(fmu, experiments, spec)
 
 
 def _fmu_path(text: str) -> Path:
@@ -147,12 +149,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 def _cmd_fit(args: argparse.Namespace) -> int:
     import fmuid
 
-    fmu, experiments, spec = _load_inputs(args)
+    fmu, experiments, spec, problem = _load_inputs(args)
     with ProgressDisplay() as progress:
-        result = fmuid.fit(fmu, experiments, spec, progress=progress)
+        result = fmuid.fit(fmu, experiments, spec, progress=progress, problem=problem)
     _write_json(Path(args.out), result.to_dict())
     if args.report:
-        _report(result, args, fmu, experiments, spec)
+        _report(result, args, problem)
     print(f"chi2 {result.chi2:.6g} with {result.n_data} data points; wrote {args.out}")  # noqa: T201
     return EXIT_OK
 
@@ -160,12 +162,14 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 def _cmd_profile(args: argparse.Namespace) -> int:
     import fmuid
 
-    fmu, experiments, spec = _load_inputs(args)
+    fmu, experiments, spec, problem = _load_inputs(args)
     with ProgressDisplay() as progress:
-        result = fmuid.profile(fmu, experiments, spec, workers=args.workers, progress=progress)
+        result = fmuid.profile(
+            fmu, experiments, spec, workers=args.workers, progress=progress, problem=problem
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
-        _report(result, args, fmu, experiments, spec)
+        _report(result, args, problem)
     print(profile_table(result))  # noqa: T201
     return EXIT_OK
 
@@ -173,12 +177,12 @@ def _cmd_profile(args: argparse.Namespace) -> int:
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.discrepancy import diagnose
 
-    fmu, experiments, spec = _load_inputs(args)
+    fmu, experiments, spec, problem = _load_inputs(args)
     with ProgressDisplay() as progress:
-        result = diagnose(fmu, experiments, spec, progress=progress)
+        result = diagnose(fmu, experiments, spec, progress=progress, problem=problem)
     _write_json(Path(args.out), result.to_dict())
     if args.report:
-        _report(result, args, fmu, experiments, spec)
+        _report(result, args, problem)
     print(result.to_dict()["verdict"])  # noqa: T201
     return EXIT_OK
 
@@ -202,12 +206,11 @@ def _cmd_design(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _report(
-    result: Any, args: argparse.Namespace, fmu: Path, experiments: list[Any], spec: Any
-) -> None:
+def _report(result: Any, args: argparse.Namespace, problem: Any) -> None:
+    """Write the report of ``result`` from the problem the engine computed it on."""
     from fmuid.report import write_report
 
-    path = write_report(result, Path(args.report), fmu=fmu, experiments=experiments, spec=spec)
+    path = write_report(result, Path(args.report), problem=problem)
     print(f"report: {path}")  # noqa: T201
 
 

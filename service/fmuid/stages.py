@@ -164,6 +164,7 @@ def fit(
     spec: Spec,
     *,
     progress: ProgressCallback | None = None,
+    problem: Problem | None = None,
 ) -> FitResult:
     """Fit the spec's free parameters of an FMU to one or more experiments.
 
@@ -180,6 +181,9 @@ def fit(
         The study (``fmuid.data.load_spec``).
     progress
         Receives ``fmuid.progress.Progress`` events.
+    problem
+        The problem :func:`make_problem` built of these inputs, to hand on one already built
+        (e.g. the one the report then draws from); default: built here.
 
     Returns
     -------
@@ -192,7 +196,7 @@ def fit(
     >>> result = fmuid.fit("fmus/msd.fmu", [load_experiment("step.csv")], load_spec("spec.json"))
 
     """
-    problem = make_problem(fmu, experiments, spec)
+    problem = problem or make_problem(fmu, experiments, spec)
     return fit_problem(problem, global_search=spec.global_search, seed=spec.seed, progress=progress)
 
 
@@ -205,6 +209,7 @@ def profile(
     workers: int | None = None,
     executor: Any = None,
     progress: ProgressCallback | None = None,
+    problem: Problem | None = None,
 ) -> ProfileResult:
     """Fit, then profile the likelihood of every free parameter.
 
@@ -220,6 +225,8 @@ def profile(
         A ``dask.distributed.Client``: branches run as tasks on its workers.
     progress
         Receives ``fmuid.progress.Progress`` events, one per profile point.
+    problem
+        As for :func:`fit`.
 
     Returns
     -------
@@ -227,7 +234,7 @@ def profile(
         Intervals, labels, profiles and structural check; ``.to_dict()`` gives the contract JSON.
 
     """
-    problem = make_problem(fmu, experiments, spec)
+    problem = problem or make_problem(fmu, experiments, spec)
     if fit is None:
         fit = fit_problem(
             problem, global_search=spec.global_search, seed=spec.seed, progress=progress
