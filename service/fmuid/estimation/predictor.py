@@ -9,8 +9,9 @@ from typing import Protocol
 import numpy as np
 
 from fmuid.data import Experiment
+from fmuid.model.base import as_model
 from fmuid.model.fmu import FmuModel
-from fmuid.model.simulator import as_model, get_simulator
+from fmuid.model.simulator import get_simulator
 
 
 class Predictor(Protocol):

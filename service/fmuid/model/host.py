@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from fmuid.errors import FmuError, FmuidError
+from fmuid.model.base import INPUT_STEP, SimulatorBase
 from fmuid.model.fmu import FmuModel
-from fmuid.model.simulator import INPUT_STEP, Simulator, SimulatorBase
+from fmuid.model.simulator import Simulator
 
 logger = logging.getLogger(__name__)
 

@@ -25,10 +25,11 @@ import fmpy
 import numpy as np
 
 from fmuid.errors import FmuError
+from fmuid.model.base import INPUT_STEP, SimulatorBase, as_model
 from fmuid.model.channels import Channels
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
-from fmuid.model.fmu import USABLE, FmuModel, Variable
+from fmuid.model.fmu import INTERFACES, USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan, make_plan
 
@@ -37,54 +38,10 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger(__name__)
 
-INPUT_STEP = 1e-3
-"""Default longest sub-step [s] over which a co-simulation FMU without input derivatives holds
-an input (the linear input is sampled at each sub-step's start)."""
 PLAN_CACHE = 32
 """Run plans kept per simulator (one per experiment of a study, typically)."""
-
-
-def as_model(fmu: FmuModel | str | Path, interface: str | None = None) -> FmuModel:
-    """Return ``fmu`` driving ``interface`` (None: as it is), parsing it only if it is a path."""
-    if isinstance(fmu, FmuModel):
-        return fmu if interface is None else fmu.with_interface(interface)
-    return FmuModel(fmu, interface)
-
-
-class SimulatorBase:
-    """What every simulator of an FMU has: the parsed FMU and how inputs reach it.
-
-    Parameters
-    ----------
-    fmu
-        The parsed FMU (:class:`FmuModel`), or a ``.fmu`` file to parse.
-    interface
-        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"`` (as :class:`FmuModel`); None:
-        the model's own (for a file: auto).
-    input_step
-        Longest sub-step [s] for co-simulation FMUs without input derivatives.
-
-    """
-
-    def __init__(
-        self,
-        fmu: FmuModel | str | Path,
-        interface: str | None = None,
-        input_step: float = INPUT_STEP,
-    ) -> None:
-        self.model = as_model(fmu, interface)
-        self.path = self.model.path
-        self.input_step = float(input_step)
-
-    @property
-    def input_handling(self) -> str:
-        """How inputs reach this FMU between their samples (for results and logs)."""
-        model = self.model
-        if not model.is_cosimulation:
-            return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
-        if model.can_interpolate_inputs:
-            return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
-        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
+FILE_MODELS = 16
+"""Models kept for callers of :func:`get_simulator` that hold only a path."""
 
 
 class Simulator(SimulatorBase):
@@ -332,6 +289,7 @@ def _remove_tree(path: str, owner: int) -> None:
 _CACHE: dict[tuple[tuple[str, str, str], int], Simulator | HostedSimulator] = {}
 _CACHE_PID = os.getpid()
 _UNRELIABLE: set[tuple[str, str, str]] = set()
+_BY_FILE: dict[tuple[str, int, int, str | None], FmuModel] = {}
 
 
 def mark_reset_unreliable(model: FmuModel) -> None:
@@ -353,6 +311,31 @@ def fmu_summary(fmu: FmuModel | str | Path, interface: str | None = None) -> dic
     }
 
 
+def _file_model(path: str | Path, interface: str | None) -> FmuModel:
+    """Return the model of the file at ``path`` for a caller that holds only the path.
+
+    Parsed again only when the file changes (its modification time or size), so that such a
+    caller, e.g. a script simulating in a loop, does not parse the FMU on every run.
+    """
+    try:
+        st = Path(path).stat()
+    except OSError as exc:
+        raise FmuError(f"FMU {path} does not exist") from exc
+    key = (
+        str(Path(path).resolve()),
+        st.st_mtime_ns,
+        st.st_size,
+        INTERFACES.get(interface, interface),
+    )
+    model = _BY_FILE.get(key)
+    if model is None:
+        model = FmuModel(path, interface)
+        if len(_BY_FILE) >= FILE_MODELS:
+            _BY_FILE.pop(next(iter(_BY_FILE)))
+        _BY_FILE[key] = model
+    return model
+
+
 def get_simulator(
     fmu: FmuModel | str | Path, interface: str | None = None
 ) -> Simulator | HostedSimulator:
@@ -366,8 +349,8 @@ def get_simulator(
     :class:`~fmuid.model.host.HostedSimulator`: a fresh instance per run, in a process replaced
     every ``FMUID_RECYCLE_RUNS`` runs.
 
-    ``fmu`` and ``interface`` are as for :class:`SimulatorBase`; hand on the parsed model
-    (a file is parsed on every call).
+    ``fmu`` and ``interface`` are as for :class:`SimulatorBase`; the engine hands on the parsed
+    model (a file given by path is parsed again only when it changes).
     """
     from fmuid.model.host import HostedSimulator  # host imports this module
 
@@ -375,7 +358,7 @@ def get_simulator(
     if _CACHE_PID != os.getpid():
         _CACHE.clear()
         _CACHE_PID = os.getpid()
-    model = as_model(fmu, interface)
+    model = as_model(fmu, interface) if isinstance(fmu, FmuModel) else _file_model(fmu, interface)
     thread = threading.get_ident()
     key = (model.key, thread)
     simulator = _CACHE.get(key)
