@@ -3,16 +3,23 @@
 import collections
 import json
 import os
+import pickle
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import fmuid
+from fmuid.estimation.optimize import fit_problem
 from fmuid.jobs.store import Dataset, JobStore
 from fmuid.model.fmu import FmuModel
+from fmuid.profiling.engine import thresholds
+from fmuid.profiling.parallel import BranchTask, PickledTask, run_branch, run_branch_anywhere
+from fmuid.profiling.walk import WalkOptions
 from fmuid.stages import make_problem
 
 from .test_msd import msd_step_data, spec
@@ -85,3 +92,27 @@ def test_a_study_parses_the_fmu_once_in_process(msd_fmu):
     assert FmuModel.parses - before == 1
     assert result.fit.fmu_sha256 == problem.model.sha256
     assert problem.predictor.model is problem.model
+
+
+def test_a_worker_without_the_file_parses_a_copy_of_the_bytes(msd_fmu, tmp_path, monkeypatch):
+    """As a dask worker on another machine: the task arrives pickled, the FMU as bytes."""
+    moved = Path(shutil.copy(msd_fmu, tmp_path / "moved.fmu"))
+    data = msd_step_data(**TRUTH, sigma=0.3, seed=6)
+    problem = make_problem(moved, [data], spec(TRUTH, 0.3))
+    fit = fit_problem(problem, global_search=False)
+    thr = thresholds(0.68, 3)["simultaneous"]
+    task = BranchTask(
+        problem, fit.z_estimate(), fit.chi2, 0, 1, thr, fit.fisher_sd_z()["m"], WalkOptions()
+    )
+    sent = PickledTask(problem.model.file, pickle.dumps(task))
+    here = run_branch(task)
+    blob = moved.read_bytes()
+    moved.unlink()
+    monkeypatch.setattr("fmuid.model.fmu._LOADED", {})  # a worker that has parsed nothing yet
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    before = FmuModel.parses
+    there = run_branch_anywhere(sent, problem.model.sha256, blob)
+    assert FmuModel.parses - before == 1
+    assert (tmp_path / "fmuid-fmus" / problem.model.sha256 / "moved.fmu").read_bytes() == blob
+    assert [p.chi2 for p in there.points] == [p.chi2 for p in here.points]
+    assert there.points[-1].chi2 - fit.chi2 > thr
