@@ -15,6 +15,7 @@ from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
+from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel
 from fmuid.model.simulator import get_simulator
@@ -51,7 +52,7 @@ class Simulation:
 
 
 def simulate(
-    fmu: str | Path,
+    fmu: str | Path | FmuModel,
     experiment: Experiment,
     values: Mapping[str, float | str] | None = None,
     *,
@@ -63,7 +64,7 @@ def simulate(
     Parameters
     ----------
     fmu
-        An FMU file or the name of a built-in model (e.g. ``"msd"``).
+        A parsed FMU, an FMU file or the name of a built-in model (e.g. ``"msd"``).
     experiment
         Its input columns drive the FMU; its output columns, if any, are not used.
     values
@@ -88,7 +89,7 @@ def simulate(
 
     """
     values = dict(values or {})
-    model = FmuModel(resolve_fmu(fmu), interface)
+    model = as_model(fmu if isinstance(fmu, FmuModel) else resolve_fmu(fmu), interface)
     unknown = sorted(set(values) - set(model.parameters))
     if unknown:
         raise SpecError(f"{source}: the FMU has no parameter(s) {', '.join(unknown)}")
@@ -132,7 +133,9 @@ def _input_at(
     return np.interp(time, input_time, values)
 
 
-def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec) -> Problem:
+def make_problem(
+    fmu: str | Path | FmuModel, experiments: Sequence[Experiment], spec: Spec
+) -> Problem:
     """Check the spec and the experiments against the FMU and build the estimation problem.
 
     Raises
@@ -141,10 +144,10 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
         When the FMU cannot be used (its binary is loaded and instantiated here), or the spec
         or data do not fit its variables.
 
-    ``fmu`` is an FMU file or the name of a built-in model (e.g. ``"msd"``).
+    ``fmu`` is a parsed FMU (:class:`FmuModel`, handed on as it is), an FMU file or the name
+    of a built-in model (e.g. ``"msd"``).
     """
-    fmu = resolve_fmu(fmu)
-    model = FmuModel(fmu)
+    model = fmu if isinstance(fmu, FmuModel) else FmuModel(resolve_fmu(fmu))
     wrong_interface = model.interface_problem(spec.interface)
     if wrong_interface:
         raise SpecError(f"{spec.source}: interface: {wrong_interface}")
@@ -155,11 +158,11 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
     if problems:
         raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
     get_simulator(model)
-    return Problem(fmu, experiments, spec, model=model)
+    return Problem(model.path, experiments, spec, model=model)
 
 
 def fit(
-    fmu: str | Path,
+    fmu: str | Path | FmuModel,
     experiments: Sequence[Experiment],
     spec: Spec,
     *,
@@ -174,7 +177,8 @@ def fit(
     Parameters
     ----------
     fmu
-        An FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g. ``"msd"``).
+        A parsed FMU (``fmuid.model.FmuModel``), an FMU file (FMI 2.0 or 3.0), or the name of
+        a built-in model (e.g. ``"msd"``).
     experiments
         Datasets (``fmuid.data.load_experiment``) sharing the parameters.
     spec
@@ -201,7 +205,7 @@ def fit(
 
 
 def profile(
-    fmu: str | Path,
+    fmu: str | Path | FmuModel,
     experiments: Sequence[Experiment],
     spec: Spec,
     *,

@@ -116,3 +116,16 @@ def test_a_worker_without_the_file_parses_a_copy_of_the_bytes(msd_fmu, tmp_path,
     assert (tmp_path / "fmuid-fmus" / problem.model.sha256 / "moved.fmu").read_bytes() == blob
     assert [p.chi2 for p in there.points] == [p.chi2 for p in here.points]
     assert there.points[-1].chi2 - fit.chi2 > thr
+
+
+def test_stages_hand_on_a_parsed_model(msd_fmu):
+    """``fmuid.simulate`` and ``make_problem`` take the model as it is: no parse."""
+    model = FmuModel(msd_fmu)
+    data = msd_step_data(**TRUTH, sigma=0.0, seed=0)
+    before = FmuModel.parses
+    run = fmuid.simulate(model, data, {"k": 4.4})
+    problem = make_problem(model, [data], spec(TRUTH, 0.3))
+    assert FmuModel.parses == before
+    assert problem.model is model and run.model is model
+    np.testing.assert_allclose(run.outputs["x"], data.columns["x"], atol=1e-8)  # scipy's
+    np.testing.assert_array_equal(run.inputs["f"], data.columns["f"])
