@@ -34,6 +34,9 @@ class Problem:
         Free parameters, overriding ``spec.parameters`` (e.g. with added physics).
     sigma
         Per experiment, output -> per-row sigma, overriding the spec's sigma resolution.
+    model
+        The parsed FMU, handed on (driving ``spec.interface``); default: parsed from
+        ``fmu_path``.
 
     """
 
@@ -50,7 +53,11 @@ class Problem:
         model: FmuModel | None = None,
     ):
         self.fmu_path = Path(fmu_path)
-        self.model = model if model is not None else FmuModel(self.fmu_path, spec.interface)
+        self.model = (
+            model.with_interface(spec.interface)
+            if model is not None
+            else FmuModel(self.fmu_path, spec.interface)
+        )
         self.experiments = list(experiments)
         self.spec = spec
         params = dict(parameters if parameters is not None else spec.parameters)
