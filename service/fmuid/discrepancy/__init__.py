@@ -9,13 +9,14 @@ from fmuid.data import Experiment, Spec
 from fmuid.discrepancy.engine import DiagnoseOptions, diagnose_problem
 from fmuid.discrepancy.result import Diagnosis
 from fmuid.estimation.problem import Problem
+from fmuid.model.fmu import FmuModel
 from fmuid.progress import ProgressCallback
 
 __all__ = ["DiagnoseOptions", "Diagnosis", "diagnose", "diagnose_problem"]
 
 
 def diagnose(
-    fmu_path: str | Path,
+    fmu_path: str | Path | FmuModel,
     experiments: Sequence[Experiment],
     spec: Spec,
     progress: ProgressCallback | None = None,
@@ -27,7 +28,8 @@ def diagnose(
     Parameters
     ----------
     fmu_path
-        An FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g. ``"msd"``).
+        A parsed FMU, an FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g.
+        ``"msd"``).
     experiments
         Datasets sharing the parameters.
     spec
