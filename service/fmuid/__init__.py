@@ -1,6 +1,6 @@
 """fmuid: black-box identifiability of FMU parameters (fits, profile likelihoods, diagnosis).
 
-The stages are plain functions: ``fmuid.fit``, ``fmuid.profile``,
+The stages are plain functions: ``fmuid.simulate``, ``fmuid.fit``, ``fmuid.profile``,
 ``fmuid.diagnose`` and ``fmuid.design``; ``fmuid.info`` describes a model, ``fmuid.load_result``
 reads a saved result back. Their machinery lives in packages with noun names, so no function
 shadows a package: :mod:`fmuid.estimation` (fits), :mod:`fmuid.profiling` (profile likelihoods),
@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 __version__ = "0.1.0"
 
 _LAZY = {
+    "simulate": "fmuid.stages",
     "fit": "fmuid.stages",
     "profile": "fmuid.stages",
     "diagnose": "fmuid.discrepancy",
@@ -25,14 +26,23 @@ _LAZY = {
     "load_result": "fmuid.results",
 }
 
-__all__ = ["__version__", "design", "diagnose", "fit", "info", "load_result", "profile"]
+__all__ = [
+    "__version__",
+    "design",
+    "diagnose",
+    "fit",
+    "info",
+    "load_result",
+    "profile",
+    "simulate",
+]
 
 if TYPE_CHECKING:
     from fmuid.discrepancy import diagnose
     from fmuid.experiment_design import design
     from fmuid.model.info import info
     from fmuid.results import load_result
-    from fmuid.stages import fit, profile
+    from fmuid.stages import fit, profile, simulate
 
 
 def __getattr__(name: str) -> Any:

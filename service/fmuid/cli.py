@@ -38,8 +38,11 @@ def _write_json(path: Path, payload: dict[str, Any]) -> None:
     tmp.replace(path)
 
 
-def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
+def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any, Any]:
+    """Return the FMU, experiments and spec of a study, and the problem built of them."""
     from fmuid.data import load_experiment, load_spec
+    from fmuid.formats.cli import apply_start
+    from fmuid.stages import make_problem
 
     fmu = _fmu_path(args.fmu)
     experiments = [load_experiment(p) for p in args.data]
@@ -49,9 +52,8 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any]:
     spec = load_spec(Path(args.spec))
     if args.interface:
         spec = spec.model_copy(update={"interface": args.interface})
-    from fmuid.formats.cli import apply_start
-
-    return fmu, experiments, apply_start(spec, args.start)
+    spec = apply_start(spec, args.start)
+    return fmu, experiments, spec, make_problem(fmu, experiments, spec)
 
 
 def _fmu_path(text: str) -> Path:
@@ -123,76 +125,36 @@ def _spec_interface(path: Path) -> str:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
+    import fmuid
     from fmuid.data import load_experiment
-    from fmuid.estimation.predictor import merged_inputs
-    from fmuid.model.fmu import USABLE, FmuModel
-    from fmuid.model.simulator import Simulator
 
-    fmu = _fmu_path(args.fmu)
     experiment = load_experiment(args.data)
     params = _simulation_values(Path(args.spec)) if args.spec else {}
     interface = args.interface or (_spec_interface(Path(args.spec)) if args.spec else "auto")
-    model = FmuModel(fmu, interface)
-    unknown = sorted(set(params) - set(model.parameters))
-    if unknown:
-        raise SpecError(f"{args.spec}: the FMU has no parameter(s) {', '.join(unknown)}")
-    problems = model.usage_problems((), params, (), ())
-    if problems:
-        raise SpecError("\n".join(f"{args.spec}: {problem}" for problem in problems))
-    unknown_cols = [
-        c
-        for c in experiment.columns
-        if c not in model.inputs
-        and c not in model.outputs
-        and not (c.startswith("sigma_") and c[6:] in model.outputs)
-    ]
-    if unknown_cols:
-        raise DataError(
-            f"{experiment.name}: column(s) {', '.join(unknown_cols)} are not FMU variables"
-        )
-    inputs = [c for c in experiment.columns if c in model.inputs]
-    held = [c for c in inputs if not model.inputs[c].is_continuous]
-    input_time, input_values = merged_inputs(experiment, inputs, held)
-    outputs = [n for n, v in model.outputs.items() if v.kind in USABLE["output"]]
-    if not outputs:
-        types = ", ".join(f"{n} ({v.type_label})" for n, v in model.outputs.items()) or "none"
-        raise FmuError(f"{fmu}: no output fmuid can read (its outputs: {types})")
-    simulator = Simulator(fmu, interface)
-    y = simulator.simulate(params, input_time, input_values, experiment.time, outputs)
-    log.info("%s; %s", model.kind_label, simulator.input_handling)
-    columns, header = [experiment.time], ["time"]
-    if args.with_inputs:
-        for name in inputs:
-            columns.append(_input_at(experiment.time, input_time, input_values[name], name in held))
-            header.append(name)
+    run = fmuid.simulate(
+        _fmu_path(args.fmu), experiment, params, interface=interface, source=str(args.spec)
+    )
+    log.info("%s; %s", run.model.kind_label, run.input_handling)
+    columns = {"time": run.time, **(run.inputs if args.with_inputs else {}), **run.outputs}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    table = np.column_stack([*columns, y])
     np.savetxt(
-        out, table, delimiter=",", header=",".join([*header, *outputs]), comments="", fmt="%.12g"
-    )
+        out, np.column_stack(list(columns.values())), delimiter=",", header=",".join(columns),
+        comments="", fmt="%.12g",
+    )  # fmt: skip
     print(out)  # noqa: T201
     return EXIT_OK
-
-
-def _input_at(time: Any, input_time: Any, values: Any, held: bool) -> Any:
-    """Return an input at ``time`` as the FMU sees it: linear between samples, or held."""
-    import numpy as np
-
-    if held:
-        return values[np.searchsorted(input_time, time, side="right") - 1]
-    return np.interp(time, input_time, values)
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     import fmuid
 
-    fmu, experiments, spec = _load_inputs(args)
+    fmu, experiments, spec, problem = _load_inputs(args)
     with ProgressDisplay() as progress:
-        result = fmuid.fit(fmu, experiments, spec, progress=progress)
+        result = fmuid.fit(fmu, experiments, spec, progress=progress, problem=problem)
     _write_json(Path(args.out), result.to_dict())
     if args.report:
-        _report(result, args, fmu, experiments, spec)
+        _report(result, args, problem)
     print(f"chi2 {result.chi2:.6g} with {result.n_data} data points; wrote {args.out}")  # noqa: T201
     return EXIT_OK
 
@@ -200,12 +162,14 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 def _cmd_profile(args: argparse.Namespace) -> int:
     import fmuid
 
-    fmu, experiments, spec = _load_inputs(args)
+    fmu, experiments, spec, problem = _load_inputs(args)
     with ProgressDisplay() as progress:
-        result = fmuid.profile(fmu, experiments, spec, workers=args.workers, progress=progress)
+        result = fmuid.profile(
+            fmu, experiments, spec, workers=args.workers, progress=progress, problem=problem
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
-        _report(result, args, fmu, experiments, spec)
+        _report(result, args, problem)
     print(profile_table(result))  # noqa: T201
     return EXIT_OK
 
@@ -213,12 +177,12 @@ def _cmd_profile(args: argparse.Namespace) -> int:
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.discrepancy import diagnose
 
-    fmu, experiments, spec = _load_inputs(args)
+    fmu, experiments, spec, problem = _load_inputs(args)
     with ProgressDisplay() as progress:
-        result = diagnose(fmu, experiments, spec, progress=progress)
+        result = diagnose(fmu, experiments, spec, progress=progress, problem=problem)
     _write_json(Path(args.out), result.to_dict())
     if args.report:
-        _report(result, args, fmu, experiments, spec)
+        _report(result, args, problem)
     print(result.to_dict()["verdict"])  # noqa: T201
     return EXIT_OK
 
@@ -242,12 +206,11 @@ def _cmd_design(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _report(
-    result: Any, args: argparse.Namespace, fmu: Path, experiments: list[Any], spec: Any
-) -> None:
+def _report(result: Any, args: argparse.Namespace, problem: Any) -> None:
+    """Write the report of ``result`` from the problem the engine computed it on."""
     from fmuid.report import write_report
 
-    path = write_report(result, Path(args.report), fmu=fmu, experiments=experiments, spec=spec)
+    path = write_report(result, Path(args.report), problem=problem)
     print(f"report: {path}")  # noqa: T201
 
 

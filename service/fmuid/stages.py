@@ -1,25 +1,141 @@
-"""The documented Python API: load inputs, fit, profile (and diagnose) in one call each."""
+"""The documented Python API: simulate, fit, profile (and diagnose) in one call each."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from fmuid.data import Experiment, Spec, check_against_model
-from fmuid.errors import SpecError
+from fmuid.errors import DataError, FmuError, SpecError
 from fmuid.estimation.optimize import fit_problem
+from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
+from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
-from fmuid.model.fmu import INTERFACES, FmuModel
+from fmuid.model.fmu import USABLE, FmuModel
 from fmuid.model.simulator import get_simulator
 from fmuid.profiling.engine import profile_problem
 from fmuid.profiling.result import ProfileResult
 from fmuid.progress import ProgressCallback
 
 
-def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec) -> Problem:
+@dataclass(frozen=True)
+class Simulation:
+    """One run of an FMU at an experiment's times (the result of :func:`simulate`).
+
+    Attributes
+    ----------
+    time
+        The experiment's times [s].
+    inputs
+        Each input the experiment drives, as the FMU saw it at ``time`` (linear between the
+        samples, or held for discrete inputs).
+    outputs
+        Every output fmuid can read, in file order, at ``time``.
+    model
+        The parsed FMU.
+    input_handling
+        How the inputs reached the FMU between their samples.
+
+    """
+
+    time: np.ndarray
+    inputs: dict[str, np.ndarray]
+    outputs: dict[str, np.ndarray]
+    model: FmuModel
+    input_handling: str
+
+
+def simulate(
+    fmu: str | Path | FmuModel,
+    experiment: Experiment,
+    values: Mapping[str, float | str] | None = None,
+    *,
+    interface: str = "auto",
+    source: str = "spec",
+) -> Simulation:
+    """Run the FMU once with the experiment's inputs and read every output at its times.
+
+    Parameters
+    ----------
+    fmu
+        A parsed FMU, an FMU file or the name of a built-in model (e.g. ``"msd"``).
+    experiment
+        Its input columns drive the FMU; its output columns, if any, are not used.
+    values
+        FMU parameter values (the others keep their start values).
+    interface
+        ``"auto"``, ``"co_simulation"`` or ``"model_exchange"``.
+    source
+        Where ``values`` come from, for error messages (e.g. the spec file).
+
+    Returns
+    -------
+    Simulation
+
+    Raises
+    ------
+    SpecError
+        When a value names no FMU parameter or does not fit its type.
+    DataError
+        When a column of the experiment is not an FMU variable.
+    FmuError
+        When the FMU cannot be used or has no output fmuid can read.
+
+    """
+    values = dict(values or {})
+    model = as_model(fmu if isinstance(fmu, FmuModel) else resolve_fmu(fmu), interface)
+    unknown = sorted(set(values) - set(model.parameters))
+    if unknown:
+        raise SpecError(f"{source}: the FMU has no parameter(s) {', '.join(unknown)}")
+    problems = model.usage_problems((), values, (), ())
+    if problems:
+        raise SpecError("\n".join(f"{source}: {problem}" for problem in problems))
+    columns = experiment.columns
+    strangers = [
+        c
+        for c in columns
+        if c not in model.inputs
+        and c not in model.outputs
+        and not (c.startswith("sigma_") and c[6:] in model.outputs)
+    ]
+    if strangers:
+        raise DataError(
+            f"{experiment.name}: column(s) {', '.join(strangers)} are not FMU variables"
+        )
+    inputs = [c for c in columns if c in model.inputs]
+    held = [c for c in inputs if not model.inputs[c].is_continuous]
+    input_time, input_values = merged_inputs(experiment, inputs, held)
+    outputs = [n for n, v in model.outputs.items() if v.kind in USABLE["output"]]
+    if not outputs:
+        types = ", ".join(f"{n} ({v.type_label})" for n, v in model.outputs.items()) or "none"
+        raise FmuError(f"{model.path}: no output fmuid can read (its outputs: {types})")
+    simulator = get_simulator(model)
+    y = simulator.simulate(values, input_time, input_values, experiment.time, outputs)
+    seen = {n: _input_at(experiment.time, input_time, input_values[n], n in held) for n in inputs}
+    return Simulation(
+        experiment.time, seen, dict(zip(outputs, y.T, strict=True)), model,
+        simulator.input_handling,
+    )  # fmt: skip
+
+
+def _input_at(
+    time: np.ndarray, input_time: np.ndarray, values: np.ndarray, held: bool
+) -> np.ndarray:
+    """Return an input at ``time`` as the FMU sees it: linear between samples, or held."""
+    if held:
+        return np.asarray(values[np.searchsorted(input_time, time, side="right") - 1])
+    return np.interp(time, input_time, values)
+
+
+def make_problem(
+    fmu: str | Path | FmuModel, experiments: Sequence[Experiment], spec: Spec
+) -> Problem:
     """Check the spec and the experiments against the FMU and build the estimation problem.
 
     Raises
@@ -28,30 +144,30 @@ def make_problem(fmu: str | Path, experiments: Sequence[Experiment], spec: Spec)
         When the FMU cannot be used (its binary is loaded and instantiated here), or the spec
         or data do not fit its variables.
 
-    ``fmu`` is an FMU file or the name of a built-in model (e.g. ``"msd"``).
+    ``fmu`` is a parsed FMU (:class:`FmuModel`, handed on as it is), an FMU file or the name
+    of a built-in model (e.g. ``"msd"``).
     """
-    fmu = resolve_fmu(fmu)
-    model = FmuModel(fmu)
+    model = fmu if isinstance(fmu, FmuModel) else FmuModel(resolve_fmu(fmu))
     wrong_interface = model.interface_problem(spec.interface)
     if wrong_interface:
         raise SpecError(f"{spec.source}: interface: {wrong_interface}")
-    if INTERFACES[spec.interface] not in (None, model.interface):
-        model = FmuModel(fmu, spec.interface)
+    model = model.with_interface(spec.interface)
     check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
     free = [*spec.parameters, *(n for p in spec.physics.values() for n in p.parameters)]
     problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
     if problems:
         raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
-    get_simulator(fmu, spec.interface)
-    return Problem(fmu, experiments, spec, model=model)
+    get_simulator(model)
+    return Problem(model.path, experiments, spec, model=model)
 
 
 def fit(
-    fmu: str | Path,
+    fmu: str | Path | FmuModel,
     experiments: Sequence[Experiment],
     spec: Spec,
     *,
     progress: ProgressCallback | None = None,
+    problem: Problem | None = None,
 ) -> FitResult:
     """Fit the spec's free parameters of an FMU to one or more experiments.
 
@@ -61,13 +177,17 @@ def fit(
     Parameters
     ----------
     fmu
-        An FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g. ``"msd"``).
+        A parsed FMU (``fmuid.model.FmuModel``), an FMU file (FMI 2.0 or 3.0), or the name of
+        a built-in model (e.g. ``"msd"``).
     experiments
         Datasets (``fmuid.data.load_experiment``) sharing the parameters.
     spec
         The study (``fmuid.data.load_spec``).
     progress
         Receives ``fmuid.progress.Progress`` events.
+    problem
+        The problem :func:`make_problem` built of these inputs, to hand on one already built
+        (e.g. the one the report then draws from); default: built here.
 
     Returns
     -------
@@ -80,12 +200,12 @@ def fit(
     >>> result = fmuid.fit("fmus/msd.fmu", [load_experiment("step.csv")], load_spec("spec.json"))
 
     """
-    problem = make_problem(fmu, experiments, spec)
+    problem = problem or make_problem(fmu, experiments, spec)
     return fit_problem(problem, global_search=spec.global_search, seed=spec.seed, progress=progress)
 
 
 def profile(
-    fmu: str | Path,
+    fmu: str | Path | FmuModel,
     experiments: Sequence[Experiment],
     spec: Spec,
     *,
@@ -93,6 +213,7 @@ def profile(
     workers: int | None = None,
     executor: Any = None,
     progress: ProgressCallback | None = None,
+    problem: Problem | None = None,
 ) -> ProfileResult:
     """Fit, then profile the likelihood of every free parameter.
 
@@ -108,6 +229,8 @@ def profile(
         A ``dask.distributed.Client``: branches run as tasks on its workers.
     progress
         Receives ``fmuid.progress.Progress`` events, one per profile point.
+    problem
+        As for :func:`fit`.
 
     Returns
     -------
@@ -115,7 +238,7 @@ def profile(
         Intervals, labels, profiles and structural check; ``.to_dict()`` gives the contract JSON.
 
     """
-    problem = make_problem(fmu, experiments, spec)
+    problem = problem or make_problem(fmu, experiments, spec)
     if fit is None:
         fit = fit_problem(
             problem, global_search=spec.global_search, seed=spec.seed, progress=progress

@@ -26,13 +26,14 @@ from fmuid.report.writer import write_report
 
 if TYPE_CHECKING:
     from fmuid.demo.thesis import DatasetRun
+    from fmuid.model.fmu import FmuModel
 
 
 def write_study_report(
     runs: Sequence[DatasetRun],
     directory: Path,
     *,
-    fmu: Path,
+    fmu: FmuModel,
     truth: Mapping[str, float],
     units: Mapping[str, str],
     reference: Mapping[str, tuple[float, float, float]],
@@ -50,7 +51,7 @@ def write_study_report(
     directory
         Output folder.
     fmu
-        The FMU the data were simulated with.
+        The parsed FMU the data were simulated with.
     truth
         Parameter values that made the data.
     units
@@ -81,7 +82,7 @@ def write_study_report(
     snrs = sorted({r.snr for r in runs}, reverse=True)
     page.verdict(study_verdict(cases))
     page.paragraph(
-        f"Thesis section 3.2.3.1 re-run on the FMU {fmu.name}: grid '{grid}' "
+        f"Thesis section 3.2.3.1 re-run on the FMU {fmu.path.name}: grid '{grid}' "
         f"({len(designs)} designs x {len(snrs)} SNR levels = {len(runs)} datasets), six tire "
         f"parameters profiled in each. Elapsed wall time {elapsed:.1f} s on {os.cpu_count()} "
         f"CPU cores (profiles alone: {sum(r.seconds for r in runs):.1f} s)."

@@ -30,6 +30,7 @@ from fmuid.demo.thesis import (
     study_spec,
 )
 from fmuid.model.builtin import builtin_fmu
+from fmuid.model.fmu import FmuModel
 from fmuid.progress import Progress
 
 
@@ -73,7 +74,7 @@ def run_demo(
     start = time.perf_counter()
     designs, snrs = GRIDS[grid]
     progress(f"demo: {len(designs)} designs x {len(snrs)} SNR levels, building the FMU if needed")
-    fmu = builtin_fmu(MODEL)
+    fmu = FmuModel(builtin_fmu(MODEL))  # parsed once, handed to every study and the report
     runs: list[DatasetRun] = []
     total = len(designs) * len(snrs)
     for design in designs:

@@ -16,6 +16,7 @@ import numpy as np
 
 from fmuid.data import Experiment, Spec, experiment_from_arrays, spec_from_json
 from fmuid.estimation.predictor import FmuPredictor
+from fmuid.model.fmu import FmuModel
 from fmuid.profiling.result import ProfileResult
 
 MODEL = "tractor_implement"
@@ -151,14 +152,14 @@ def steer_samples(design: Design) -> tuple[np.ndarray, np.ndarray]:
 
 
 def simulate_dataset(
-    fmu: Path, design: Design, snr: float, rng: np.random.Generator
+    fmu: Path | FmuModel, design: Design, snr: float, rng: np.random.Generator
 ) -> tuple[Experiment, float]:
     """Simulate a design at the nominal parameters and add noise at ``snr``.
 
     Parameters
     ----------
     fmu
-        The tractor-implement FMU.
+        The tractor-implement FMU (parsed, or its file).
     design
         Steer input and sampling rate.
     snr

@@ -8,24 +8,28 @@ from pathlib import Path
 from fmuid.data import Experiment, Spec
 from fmuid.discrepancy.engine import DiagnoseOptions, diagnose_problem
 from fmuid.discrepancy.result import Diagnosis
+from fmuid.estimation.problem import Problem
+from fmuid.model.fmu import FmuModel
 from fmuid.progress import ProgressCallback
 
 __all__ = ["DiagnoseOptions", "Diagnosis", "diagnose", "diagnose_problem"]
 
 
 def diagnose(
-    fmu_path: str | Path,
+    fmu_path: str | Path | FmuModel,
     experiments: Sequence[Experiment],
     spec: Spec,
     progress: ProgressCallback | None = None,
     options: DiagnoseOptions = DiagnoseOptions(),
+    problem: Problem | None = None,
 ) -> Diagnosis:
     """Fit the spec's model, test its residuals and explain a mismatch by left-out physics.
 
     Parameters
     ----------
     fmu_path
-        An FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g. ``"msd"``).
+        A parsed FMU, an FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g.
+        ``"msd"``).
     experiments
         Datasets sharing the parameters.
     spec
@@ -34,6 +38,8 @@ def diagnose(
         Receives ``Progress("diagnose", done, total, detail)`` events.
     options
         Levels and effort (default: false-alarm level 0.01, 95% intervals).
+    problem
+        The problem ``fmuid.stages.make_problem`` built of these inputs (default: built here).
 
     Returns
     -------
@@ -43,5 +49,5 @@ def diagnose(
     """
     from fmuid.stages import make_problem
 
-    problem = make_problem(fmu_path, experiments, spec)
+    problem = problem or make_problem(fmu_path, experiments, spec)
     return diagnose_problem(problem, options=options, progress=progress)

@@ -276,6 +276,6 @@ def make_fit_result(
         global_search=global_search,
         message=message,
         cost=Cost(problem.simulations - sims0, time.perf_counter() - t0),
-        fmu_info=fmu_summary(problem.fmu_path, problem.spec.interface),
+        fmu_info=fmu_summary(problem.model),
         units=problem.units(),
     )

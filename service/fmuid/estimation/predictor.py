@@ -9,6 +9,8 @@ from typing import Protocol
 import numpy as np
 
 from fmuid.data import Experiment
+from fmuid.model.base import as_model
+from fmuid.model.fmu import FmuModel
 from fmuid.model.simulator import get_simulator
 
 
@@ -55,26 +57,28 @@ class FmuPredictor:
 
     Parameters
     ----------
-    fmu_path
-        The FMU file; each process keeps one warm instance of it (``get_simulator``).
+    fmu
+        The parsed FMU (or its file, parsed here); each process keeps one warm instance of it
+        (``get_simulator``).
     fixed
         FMU parameter values that are set in every run but not fitted.
     inputs
         Names of the FMU inputs driven from the experiments' columns.
     interface
-        ``"auto"``, ``"co_simulation"`` or ``"model_exchange"`` (the spec's ``interface``).
+        ``"auto"``, ``"co_simulation"`` or ``"model_exchange"`` (the spec's ``interface``);
+        None: the model's.
 
     """
 
     def __init__(
         self,
-        fmu_path: str | Path,
+        fmu: FmuModel | str | Path,
         fixed: Mapping[str, float | str],
         inputs: Sequence[str],
-        interface: str = "auto",
+        interface: str | None = None,
     ):
-        self.fmu_path = str(fmu_path)
-        self.interface = interface
+        self.model = as_model(fmu, interface)
+        self.fmu_path = str(self.model.path)
         self.fixed = dict(fixed)
         self.inputs = tuple(inputs)
         self._inputs_cache: dict[int, tuple[Experiment, np.ndarray, dict[str, np.ndarray]]] = {}
@@ -89,7 +93,7 @@ class FmuPredictor:
         """Return the experiment's inputs on their merged sample times (cached)."""
         cached = self._inputs_cache.get(id(experiment))
         if cached is None or cached[0] is not experiment:
-            variables = get_simulator(self.fmu_path, self.interface).model.inputs
+            variables = self.model.inputs
             held = [n for n in self.inputs if n in variables and not variables[n].is_continuous]
             cached = (experiment, *merged_inputs(experiment, self.inputs, held))
             self._inputs_cache[id(experiment)] = cached
@@ -101,6 +105,6 @@ class FmuPredictor:
         """Simulate the FMU and return ``outputs`` at every row of the experiment."""
         input_time, input_values = self.inputs_of(experiment)
         values = {**self.fixed, **params}
-        return get_simulator(self.fmu_path, self.interface).simulate(
+        return get_simulator(self.model).simulate(
             values, input_time, input_values, experiment.time, list(outputs)
         )

@@ -34,6 +34,9 @@ class Problem:
         Free parameters, overriding ``spec.parameters`` (e.g. with added physics).
     sigma
         Per experiment, output -> per-row sigma, overriding the spec's sigma resolution.
+    model
+        The parsed FMU, handed on (driving ``spec.interface``); default: parsed from
+        ``fmu_path``.
 
     """
 
@@ -50,7 +53,11 @@ class Problem:
         model: FmuModel | None = None,
     ):
         self.fmu_path = Path(fmu_path)
-        self.model = model if model is not None else FmuModel(self.fmu_path, spec.interface)
+        self.model = (
+            model.with_interface(spec.interface)
+            if model is not None
+            else FmuModel(self.fmu_path, spec.interface)
+        )
         self.experiments = list(experiments)
         self.spec = spec
         params = dict(parameters if parameters is not None else spec.parameters)
@@ -69,9 +76,7 @@ class Problem:
             }
         )
         self.inputs = inputs
-        self.predictor: Predictor = predictor or FmuPredictor(
-            self.fmu_path, spec.fixed, inputs, spec.interface
-        )
+        self.predictor: Predictor = predictor or FmuPredictor(self.model, spec.fixed, inputs)
         self.masks = [
             [
                 exp.output_mask(o) if o in exp.columns else np.zeros(exp.n_rows, bool)

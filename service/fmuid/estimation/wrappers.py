@@ -135,7 +135,7 @@ class AugmentedPredictor:
         # them, interpolate by a cubic spline onto the fine grid and filter there
         out_time = np.union1d(experiment.time, common[common <= experiment.time[-1]])
         out_time = out_time if lag else experiment.time
-        y = get_simulator(self.base.fmu_path, self.base.interface).simulate(
+        y = get_simulator(self.base.model).simulate(
             {**self.base.fixed, **fmu_params}, common, values, out_time, list(outputs)
         )
         y = np.array(y, dtype=float)

@@ -87,10 +87,11 @@ class Hypothesis:
                 "fixed": {**spec.fixed, **trial.fixed, **self.fixed},
             }
         )
-        base = FmuPredictor(path, tspec.fixed, [space.input])
+        model = _model(path)
+        base = FmuPredictor(model, tspec.fixed, [space.input])
         predictor = AugmentedPredictor(base, dict(self.wrappers)) if self.wrappers else base
         exp = trial_experiment(trial, space.input, values)
-        return Problem(path, [exp], tspec, predictor=predictor, model=_model(path))
+        return Problem(path, [exp], tspec, predictor=predictor, model=model)
 
 
 @functools.lru_cache(maxsize=8)

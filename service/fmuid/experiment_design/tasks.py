@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import pickle
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
-from pathlib import Path
 from typing import Any, TypeVar
 
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import FmuFile, FmuModel, load_model
 from fmuid.model.simulator import get_simulator, mark_reset_unreliable
-from fmuid.profiling.parallel import use_fmu_here
+from fmuid.profiling.parallel import PickledTask
 from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 
 T = TypeVar("T")
@@ -65,30 +65,31 @@ def run_evaluations(
         if on_done is not None:
             on_done(k, result)
 
-    unreliable = get_simulator(model.path, interface).reset_reliable is False
+    model = model.with_interface(interface)
+    unreliable = get_simulator(model).reset_reliable is False
     if executor is not None:
-        _run_dask(evaluate, tasks, model, interface, unreliable, executor, finished)
+        _run_dask(evaluate, tasks, model, unreliable, executor, finished)
     elif min(workers or os.cpu_count() or 1, len(tasks)) <= 1:
         for k, task in enumerate(tasks):
             finished(k, evaluate(task))
     else:
         n = min(workers or os.cpu_count() or 1, len(tasks))
-        _run_pool(evaluate, tasks, model, interface, unreliable, n, finished)
+        _run_pool(evaluate, tasks, model, unreliable, n, finished)
     return [results[k] for k in range(len(tasks))]
 
 
-def _init_worker(owner: int, path: Path, interface: str, unreliable: bool) -> None:
-    """Die with the pool's owner; know its verdict on the FMU's reset (not inherited)."""
+def _init_worker(owner: int, fmu: FmuFile, unreliable: bool) -> None:
+    """Die with the pool's owner; parse the FMU once; know its verdict on the FMU's reset."""
     die_with_pool_owner(owner)
+    model = load_model(fmu)
     if unreliable:
-        mark_reset_unreliable(path, interface)
+        mark_reset_unreliable(model)
 
 
 def _run_pool(
     evaluate: Callable[[T], R],
     tasks: Sequence[T],
     model: FmuModel,
-    interface: str,
     unreliable: bool,
     n: int,
     finished: Callable[[int, R], None],
@@ -100,7 +101,7 @@ def _run_pool(
         n,
         mp_context=ctx,
         initializer=_init_worker,
-        initargs=(os.getpid(), model.path, interface, unreliable),
+        initargs=(os.getpid(), model.file, unreliable),
     )
     try:
         futures: dict[Future[R], int] = {pool.submit(evaluate, t): k for k, t in enumerate(tasks)}
@@ -114,7 +115,6 @@ def _run_dask(
     evaluate: Callable[[T], R],
     tasks: Sequence[T],
     model: FmuModel,
-    interface: str,
     unreliable: bool,
     client: Any,
     finished: Callable[[int, R], None],
@@ -122,11 +122,11 @@ def _run_dask(
     from distributed import as_completed as dask_completed
 
     # the FMU's bytes travel with each task (see fmuid.profiling.parallel._run_dask)
-    blob = Path(model.path).read_bytes()
+    blob = model.path.read_bytes()
     futures = [
         client.submit(
-            evaluate_anywhere, evaluate, t, model.path, model.sha256, blob, interface, unreliable,
-            pure=False,
+            evaluate_anywhere, PickledTask(model.file, pickle.dumps((evaluate, t))), blob,
+            unreliable, pure=False,
         )
         for t in tasks
     ]  # fmt: skip
@@ -138,17 +138,9 @@ def _run_dask(
         client.cancel([f for f in futures if not f.done()])
 
 
-def evaluate_anywhere(
-    evaluate: Callable[[T], R],
-    task: T,
-    path: Path,
-    sha256: str,
-    fmu_bytes: bytes,
-    interface: str,
-    reset_unreliable: bool,
-) -> R:
-    """Evaluate a task on a worker that may not see the FMU file (a dask task)."""
-    use_fmu_here(path, sha256, fmu_bytes)
+def evaluate_anywhere(job: PickledTask, fmu_bytes: bytes, reset_unreliable: bool) -> Any:
+    """Evaluate a pickled ``(evaluate, task)`` on a worker that may not see the FMU file."""
+    model, (evaluate, task) = job.load(fmu_bytes)
     if reset_unreliable:
-        mark_reset_unreliable(path, interface)
+        mark_reset_unreliable(model)
     return evaluate(task)

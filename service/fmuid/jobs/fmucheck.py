@@ -149,8 +149,10 @@ def _check_member_name(info: zipfile.ZipInfo, name: str) -> None:
         raise FmuError(f"{name}: member {member!r} is a symbolic link")
 
 
-def probe_binary(path: Path, name: str, limits: FmuLimits) -> None:
+def probe_binary(model: FmuModel, name: str, limits: FmuLimits) -> None:
     """Load the FMU's linux64 binary in its own process group and check its FMI functions.
+
+    The probe gets the FMI version, interface and model identifier of the parsed ``model``.
 
     The group is killed when the probe ends, in time or not, so that whatever the binary forked
     ends with it.
@@ -163,10 +165,11 @@ def probe_binary(path: Path, name: str, limits: FmuLimits) -> None:
     """
     script = Path(__file__).with_name("probe_fmu.py")
     timeout = limits.probe_timeout_s
-    command = [sys.executable, "-I", str(script), str(path), str(limits.probe_memory_mb)]
+    command = [sys.executable, "-I", str(script), str(model.path), str(limits.probe_memory_mb)]
+    described = [model.fmi_version, model.interface, model.model_identifier]
     with tempfile.TemporaryFile("w+") as errors:
         proc = subprocess.Popen(
-            [*command, str(max(1, round(timeout)))],
+            [*command, str(max(1, round(timeout))), *described],
             stdout=subprocess.DEVNULL,
             stderr=errors,
             process_group=0,
@@ -226,5 +229,5 @@ def check_fmu(path: Path, name: str, limits: FmuLimits) -> FmuModel:
     except FmuError as exc:
         message = str(exc).replace(f"{path}: ", "").replace(str(path), "the upload")
         raise FmuError(f"{name}: {message}", exc.function, exc.status) from exc
-    probe_binary(path, name, limits)
+    probe_binary(model, name, limits)
     return model

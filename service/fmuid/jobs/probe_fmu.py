@@ -1,11 +1,12 @@
 """Load an FMU's linux binary in a throw-away process and check its FMI 2.0/3.0 functions.
 
-Run as a script (``python -I probe_fmu.py FMU MEMORY_MB TIMEOUT_S``) by
-:mod:`fmuid.jobs.fmucheck`, as the leader of its own process group; it imports only the standard
-library so that it starts fast, and it limits its own memory, file sizes and time (an alarm
-ends it) before touching the upload: loading a shared library runs its constructors, which is
-native code from the uploader. Exit status 0 when the binary loads and exports every function
-below; otherwise 1 with one line on stderr saying why.
+Run as a script (``python -I probe_fmu.py FMU MEMORY_MB TIMEOUT_S FMI_VERSION INTERFACE
+MODEL_IDENTIFIER``) by :mod:`fmuid.jobs.fmucheck`, which has parsed the FMU and hands on what the
+probe needs from its model description, as the leader of its own process group; it imports only
+the standard library so that it starts fast, and it limits its own memory, file sizes and time
+(an alarm ends it) before touching the upload: loading a shared library runs its constructors,
+which is native code from the uploader. Exit status 0 when the binary loads and exports every
+function below; otherwise 1 with one line on stderr saying why.
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import shutil
 import signal
 import sys
 import tempfile
-import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
@@ -41,16 +41,10 @@ INTERFACE = {
 BINARIES = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
 
 
-def _probe(fmu: Path, workdir: Path) -> str | None:
+def _probe(fmu: Path, workdir: Path, version: str, kind: str, ident: str) -> str | None:
+    if (version, kind) not in INTERFACE:
+        return f"FMI {version} {kind} is not supported"
     with zipfile.ZipFile(fmu) as zf:
-        root = ET.fromstring(zf.read("modelDescription.xml"))
-        version = "3.0" if root.get("fmiVersion", "").startswith("3.") else root.get("fmiVersion")
-        if version not in BINARIES:
-            return f"FMI version {version} is not supported (only 2.0 and 3.0)"
-        kind = next((k for k in ("CoSimulation", "ModelExchange") if root.find(k) is not None), "")
-        if not kind:
-            return "modelDescription.xml has neither CoSimulation nor ModelExchange"
-        ident = root.find(kind).get("modelIdentifier", "")  # type: ignore[union-attr]
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
             return f"modelIdentifier {ident!r} is not a valid C identifier"
         folder = BINARIES[version]
@@ -79,7 +73,11 @@ def _probe(fmu: Path, workdir: Path) -> str | None:
 
 
 def main(argv: list[str]) -> int:
-    """Probe the FMU ``argv[1]`` within ``argv[2]`` MiB of address space and ``argv[3]`` s."""
+    """Probe the FMU ``argv[1]`` within ``argv[2]`` MiB of address space and ``argv[3]`` s.
+
+    ``argv[4:7]``: its FMI version, the interface fmuid drives, that interface's model
+    identifier.
+    """
     signal.alarm(int(argv[3]))
     limit = int(argv[2]) * 1024 * 1024
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
@@ -87,8 +85,8 @@ def main(argv: list[str]) -> int:
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
     with tempfile.TemporaryDirectory(prefix="fmuid-probe-") as workdir:
         try:
-            problem = _probe(Path(argv[1]), Path(workdir))
-        except (zipfile.BadZipFile, ET.ParseError, OSError, KeyError, MemoryError) as exc:
+            problem = _probe(Path(argv[1]), Path(workdir), *argv[4:7])
+        except (zipfile.BadZipFile, OSError, KeyError, MemoryError) as exc:
             problem = f"cannot be unpacked: {exc}"
     if problem:
         sys.stderr.write(problem + "\n")

@@ -5,6 +5,7 @@ Supported: FMI 2.0 or 3.0, co-simulation or model exchange, with a linux x86-64 
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import logging
 import posixpath
@@ -13,11 +14,13 @@ import zipfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import fmpy
 from fmpy.model_description import ModelDescription
 
 from fmuid.errors import FmuError
+from fmuid.model.variable import USABLE, Variable, from_fmpy
 
 logger = logging.getLogger(__name__)
 
@@ -36,18 +39,7 @@ co-simulation when the FMU has it, else model exchange."""
 SPEC_NAMES = {CO_SIMULATION: "co_simulation", MODEL_EXCHANGE: "model_exchange"}
 """The spec's name of each FMI interface."""
 
-FLOAT_TYPES = frozenset({"Real", "Float64", "Float32"})
-INTEGER_TYPES = frozenset(
-    {"Integer", "Enumeration", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64",
-     "UInt64"}
-)  # fmt: skip
 BINARY_DIR = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
-USABLE = {
-    "parameter": ("float", "integer", "boolean", "string"),
-    "input": ("float", "integer", "boolean"),
-    "output": ("float", "integer", "boolean"),
-}
-"""Variable kinds (:attr:`Variable.kind`) fmuid can set or read in each role."""
 _ROLE_HELP = {
     "parameters": "only Real/Float parameters can be fitted; set others under 'fixed'",
     "inputs": "inputs must be Real/Float, Integer, Enumeration or Boolean scalars",
@@ -59,67 +51,6 @@ _FIXED_HELP = {
     "integer": "give it a whole number",
     "boolean": "give it 0 or 1",
 }
-
-
-@dataclass(frozen=True)
-class Variable:
-    """One scalar variable of an FMU, with its FMI names.
-
-    Attributes
-    ----------
-    name
-        Variable name in ``modelDescription.xml``.
-    value_reference
-        FMI value reference.
-    causality
-        ``parameter``, ``input``, ``output``, ...
-    variability
-        ``tunable``, ``fixed``, ``continuous``, ``discrete``, ...
-    start
-        Start value of a numeric variable (Boolean as 0/1), or None.
-    unit
-        Unit name, or None.
-    description
-        Free text (may be empty).
-    type
-        FMI type name: ``Real``, ``Integer``, ``Boolean``, ``String``, ``Enumeration`` (FMI 2.0)
-        or ``Float64``, ``Int32``, ``Binary``, ``Clock``, ... (FMI 3.0).
-    shape
-        Array dimensions (FMI 3.0; -1 where a structural parameter sets the size); empty for a
-        scalar.
-
-    """
-
-    name: str
-    value_reference: int
-    causality: str
-    variability: str
-    start: float | None
-    unit: str | None
-    description: str
-    type: str = "Real"
-    shape: tuple[int, ...] = ()
-
-    @property
-    def kind(self) -> str:
-        """``float``, ``integer`` (also Enumeration), ``boolean``, ``string`` or ``unusable``."""
-        if self.shape:
-            return "unusable"
-        if self.type in FLOAT_TYPES:
-            return "float"
-        if self.type in INTEGER_TYPES:
-            return "integer"
-        return {"Boolean": "boolean", "String": "string"}.get(self.type, "unusable")
-
-    @property
-    def is_continuous(self) -> bool:
-        """Whether an input is linear between samples (a float that is not ``discrete``)."""
-        return self.kind == "float" and self.variability != "discrete"
-
-    @property
-    def type_label(self) -> str:
-        """The FMI type as a user reads it, e.g. ``Int32`` or ``Float64 array``."""
-        return f"{self.type} array" if self.shape else self.type
 
 
 def _check_archive(path: Path) -> set[str]:
@@ -153,36 +84,48 @@ def _fmi_version(path: Path, names: set[str]) -> str:
     return "3.0" if version.startswith("3.") else version
 
 
-def _start(value: object, type_name: str) -> float | None:
-    if value is None or type_name in ("String", "Binary", "Clock"):
-        return None
-    text = str(value).strip()
-    if type_name == "Boolean":
-        return 1.0 if text.lower() in ("true", "1") else 0.0
-    try:
-        return float(text)
-    except ValueError:
-        return None
+@dataclass(frozen=True)
+class FmuFile:
+    """What a process hands another so that it parses the FMU once: file, checksum, interface.
+
+    A pickled :class:`FmuModel` travels as this; :func:`load_model` turns it back into the
+    receiving process's one parsed model.
+    """
+
+    path: str
+    sha256: str
+    interface: str
 
 
-def _variable(v: fmpy.model_description.ModelVariable) -> Variable:
-    unit = v.unit if v.unit else (getattr(v.declaredType, "unit", None) if v.declaredType else None)
-    shape = tuple(int(d.start) if d.start is not None else -1 for d in v.dimensions)
-    return Variable(
-        name=v.name,
-        value_reference=int(v.valueReference),
-        causality=v.causality,
-        variability=v.variability or "continuous",
-        start=_start(v.start, v.type),
-        unit=unit or None,
-        description=v.description or "",
-        type=v.type,
-        shape=shape,
-    )
+_LOADED: dict[tuple[str, str], FmuModel] = {}
+
+
+def load_model(file: FmuFile) -> FmuModel:
+    """Return this process's model of ``file``, parsing it on the first request only.
+
+    The model is found by checksum and interface: once a worker has parsed a local copy of
+    the FMU, the pickled models naming the submitter's path find that copy.
+
+    Raises
+    ------
+    FmuError
+        If the file is missing, invalid, or no longer has the checksum ``file.sha256``.
+
+    """
+    key = (file.sha256, file.interface)
+    model = _LOADED.get(key)
+    if model is None:
+        model = FmuModel(file.path, file.interface, sha256=file.sha256)
+        _LOADED[key] = model
+    return model
 
 
 class FmuModel:
     """An FMI 2.0 or 3.0 FMU (co-simulation or model exchange) with a linux x86-64 binary.
+
+    The file is read, checked and hashed once, here; the model is then handed on (to the
+    simulator, the problem, the result). Pickled, it travels as an :class:`FmuFile` and is
+    parsed once in the receiving process (:func:`load_model`).
 
     Parameters
     ----------
@@ -192,6 +135,8 @@ class FmuModel:
         ``"co_simulation"`` (or ``"CoSimulation"``), ``"model_exchange"`` (or
         ``"ModelExchange"``), or ``"auto"``/None: co-simulation when the FMU has it (its own
         solver, as its exporter tuned it), else model exchange.
+    sha256
+        The checksum the file must have (the file a parent process parsed), or None.
 
     Attributes
     ----------
@@ -215,14 +160,27 @@ class FmuModel:
     ------
     FmuError
         If the file is not a zip archive, has entries escaping the extraction directory, is not
-        FMI 2.0 or 3.0, lacks the requested interface or has no linux x86-64 binary.
+        FMI 2.0 or 3.0, lacks the requested interface, has no linux x86-64 binary, or does not
+        have the checksum ``sha256``.
 
     """
 
-    def __init__(self, path: str | Path, interface: str | None = None) -> None:
+    parses: ClassVar[int] = 0
+    """FMU files read and hashed (then parsed) in this process."""
+
+    def __init__(
+        self, path: str | Path, interface: str | None = None, *, sha256: str | None = None
+    ) -> None:
         self.path = Path(path)
         names = _check_archive(self.path)
         self.sha256 = hashlib.sha256(self.path.read_bytes()).hexdigest()
+        FmuModel.parses += 1
+        if sha256 is not None and sha256 != self.sha256:
+            raise FmuError(
+                f"{self.path}: the FMU changed: its sha256 is {self.sha256[:12]}..., "
+                f"expected {sha256[:12]}..."
+            )
+        logger.debug("parsed %s (sha256 %s)", self.path, self.sha256[:12])
         version = _fmi_version(self.path, names)
         if version not in BINARY_DIR:
             raise FmuError(
@@ -245,14 +203,8 @@ class FmuModel:
         self.model_name: str = description.modelName
         self.fmi_version: str = version
         self.guid: str = description.guid or description.instantiationToken or ""
-        kind = description.coSimulation if self.is_cosimulation else description.modelExchange
-        self.model_identifier: str = kind.modelIdentifier
-        binary = f"{BINARY_DIR[version]}/{self.model_identifier}.so"
-        if binary not in names:
-            raise FmuError(
-                f"{self.path}: the FMI {version} FMU has no linux x86-64 binary ({binary} is "
-                "missing; source-code-only FMUs are not compiled by fmuid)"
-            )
+        self._archive = frozenset(names)
+        self.model_identifier: str = self._identifier()
         self.parameters: dict[str, Variable] = {}
         self.inputs: dict[str, Variable] = {}
         self.outputs: dict[str, Variable] = {}
@@ -265,7 +217,50 @@ class FmuModel:
         for v in description.modelVariables:
             group = groups.get(v.causality)
             if group is not None:
-                group[v.name] = _variable(v)
+                group[v.name] = from_fmpy(v)
+
+    @property
+    def key(self) -> tuple[str, str, str]:
+        """What identifies this model's simulators: checksum, resolved file, interface."""
+        return (self.sha256, str(self.path.resolve()), self.interface)
+
+    @property
+    def file(self) -> FmuFile:
+        """The file, checksum and interface another process parses this model from."""
+        return FmuFile(str(self.path), self.sha256, self.interface)
+
+    def __reduce__(self) -> tuple[object, tuple[FmuFile]]:
+        """Pickle as the :class:`FmuFile`: the receiving process parses it once."""
+        return (load_model, (self.file,))
+
+    def with_interface(self, interface: str | None) -> FmuModel:
+        """Return this model driving ``interface`` (as in the constructor), without re-parsing.
+
+        Raises
+        ------
+        FmuError
+            If the FMU lacks that interface.
+
+        """
+        chosen = _choose_interface(self.path, self.interfaces, interface)
+        if chosen == self.interface:
+            return self
+        other = copy.copy(self)
+        other.interface = chosen
+        other.model_identifier = other._identifier()
+        return other
+
+    def _identifier(self) -> str:
+        """Return the driven interface's model identifier, checking that its binary is there."""
+        description = self.model_description
+        kind = description.coSimulation if self.is_cosimulation else description.modelExchange
+        binary = f"{BINARY_DIR[self.fmi_version]}/{kind.modelIdentifier}.so"
+        if binary not in self._archive:
+            raise FmuError(
+                f"{self.path}: the FMI {self.fmi_version} FMU has no linux x86-64 binary "
+                f"({binary} is missing; source-code-only FMUs are not compiled by fmuid)"
+            )
+        return str(kind.modelIdentifier)
 
     def interface_problem(self, wanted: str) -> str | None:
         """Say why a study cannot drive the interface ``wanted`` (a spec name), else None."""

@@ -25,7 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from fmuid.errors import FmuError, FmuidError
-from fmuid.model.simulator import INPUT_STEP, Simulator, SimulatorBase
+from fmuid.model.base import INPUT_STEP, SimulatorBase
+from fmuid.model.fmu import FmuModel
+from fmuid.model.simulator import Simulator
 
 logger = logging.getLogger(__name__)
 
@@ -66,7 +68,7 @@ class HostedSimulator(SimulatorBase):
 
     Parameters
     ----------
-    path, interface, input_step
+    fmu, interface, input_step
         As for :class:`~fmuid.model.simulator.SimulatorBase`.
     runs_per_process
         Runs after which the child process is replaced; default :func:`recycle_runs`.
@@ -82,12 +84,12 @@ class HostedSimulator(SimulatorBase):
 
     def __init__(
         self,
-        path: str | Path,
+        fmu: FmuModel | str | Path,
         interface: str | None = None,
         input_step: float = INPUT_STEP,
         runs_per_process: int | None = None,
     ) -> None:
-        super().__init__(path, interface, input_step)
+        super().__init__(fmu, interface, input_step)
         self.runs_per_process = runs_per_process or recycle_runs()
         self.processes = 0
         self._runs = 0
@@ -137,7 +139,7 @@ class HostedSimulator(SimulatorBase):
     def _replace_child(self) -> None:
         if self._child is not None:
             self._child.stop()
-        self._child = _Child(self.path, self.interface, self.input_step)
+        self._child = _Child(self.model, self.input_step)
         self.processes += 1
         self._runs = 0
         logger.debug("%s: simulation process %d started", self.model.model_name, self.processes)
@@ -156,7 +158,7 @@ class _Child:
     which multiprocessing does not let start children.
     """
 
-    def __init__(self, path: Path, interface: str | None, input_step: float) -> None:
+    def __init__(self, model: FmuModel, input_step: float) -> None:
         self.conn, child_conn = multiprocessing.Pipe()
         self.pid = os.fork()
         if self.pid == 0:  # the child: serve, never return into the caller's code
@@ -165,10 +167,10 @@ class _Child:
                 for other in list(_LIVE):  # other simulation processes' pipes are not ours
                     other.conn.close()
                 self.conn.close()
-                _serve(child_conn, str(path), interface, input_step)
+                _serve(child_conn, model, input_step)
                 code = 0
             except BaseException:
-                logger.exception("simulation process for %s failed", path)
+                logger.exception("simulation process for %s failed", model.path)
             finally:
                 os._exit(code)
         child_conn.close()
@@ -209,12 +211,15 @@ def _stop(conn: Connection, pid: int, owner: int) -> int | None:
         return None
 
 
-def _serve(conn: Connection, path: str, interface: str | None, input_step: float) -> None:
-    """Child process: answer simulation requests until ``None`` or the parent's end closes."""
+def _serve(conn: Connection, model: FmuModel, input_step: float) -> None:
+    """Child process: answer simulation requests until ``None`` or the parent's end closes.
+
+    The child is forked: it has the parent's parsed model and does not parse the FMU again.
+    """
     simulator: Simulator | None = None
     failure: tuple[str | None, ...] | None = None
     try:
-        simulator = Simulator(path, interface, input_step, reset_reliable=False)
+        simulator = Simulator(model, input_step=input_step, reset_reliable=False)
     except FmuError as exc:
         failure = ("fmu", str(exc), exc.function, exc.status)
     while True:

@@ -6,8 +6,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-import fmpy
-
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel, Variable
 from fmuid.model.smoke import ModelHealth, model_health
@@ -111,16 +109,9 @@ def info(model: str | Path, health: bool = True) -> ModelInfo:
     """
     path = resolve_fmu(model)
     fmu = FmuModel(path)
-    description = fmpy.read_model_description(str(path))
+    description = fmu.model_description
     declared = {v.name: v for v in description.modelVariables}
-    interfaces = tuple(
-        name
-        for name, present in (
-            ("CoSimulation", description.coSimulation),
-            ("ModelExchange", description.modelExchange),
-        )
-        if present is not None
-    )
+    interfaces = fmu.interfaces
 
     def entries(variables: dict[str, Variable]) -> tuple[VariableInfo, ...]:
         return tuple(_entry(v, declared.get(v.name)) for v in variables.values())
@@ -135,7 +126,7 @@ def info(model: str | Path, health: bool = True) -> ModelInfo:
         parameters=entries(fmu.parameters),
         inputs=entries(fmu.inputs),
         outputs=entries(fmu.outputs),
-        health=model_health(path, fmu, _stop_time(description)) if health else None,
+        health=model_health(fmu, _stop_time(description)) if health else None,
     )
 
 

@@ -25,6 +25,7 @@ import fmpy
 import numpy as np
 
 from fmuid.errors import FmuError
+from fmuid.model.base import INPUT_STEP, SimulatorBase, as_model
 from fmuid.model.channels import Channels
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
@@ -37,44 +38,10 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger(__name__)
 
-INPUT_STEP = 1e-3
-"""Default longest sub-step [s] over which a co-simulation FMU without input derivatives holds
-an input (the linear input is sampled at each sub-step's start)."""
 PLAN_CACHE = 32
 """Run plans kept per simulator (one per experiment of a study, typically)."""
-
-
-class SimulatorBase:
-    """What every simulator of an FMU has: the parsed FMU and how inputs reach it.
-
-    Parameters
-    ----------
-    path
-        The ``.fmu`` file.
-    interface
-        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"``/None (as :class:`FmuModel`).
-    input_step
-        Longest sub-step [s] for co-simulation FMUs without input derivatives.
-
-    """
-
-    def __init__(
-        self, path: str | Path, interface: str | None = None, input_step: float = INPUT_STEP
-    ) -> None:
-        self.model = FmuModel(path, interface)
-        self.path = self.model.path
-        self.interface = interface
-        self.input_step = float(input_step)
-
-    @property
-    def input_handling(self) -> str:
-        """How inputs reach this FMU between their samples (for results and logs)."""
-        model = self.model
-        if not model.is_cosimulation:
-            return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
-        if model.can_interpolate_inputs:
-            return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
-        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
+FILE_MODELS = 16
+"""Models kept for callers of :func:`get_simulator` that hold only a path."""
 
 
 class Simulator(SimulatorBase):
@@ -82,7 +49,7 @@ class Simulator(SimulatorBase):
 
     Parameters
     ----------
-    path, interface, input_step
+    fmu, interface, input_step
         As for :class:`SimulatorBase`.
     reset_reliable
         False: give every run a fresh instance without checking the reset; None: check it on
@@ -104,12 +71,12 @@ class Simulator(SimulatorBase):
 
     def __init__(
         self,
-        path: str | Path,
+        fmu: FmuModel | str | Path,
         interface: str | None = None,
         input_step: float = INPUT_STEP,
         reset_reliable: bool | None = None,
     ) -> None:
-        super().__init__(path, interface, input_step)
+        super().__init__(fmu, interface, input_step)
         self._unzip_dir = tempfile.mkdtemp(prefix="fmuid-fmu-")
         self._cleanup = weakref.finalize(self, _remove_tree, self._unzip_dir, os.getpid())
         fmpy.extract(str(self.path), unzipdir=self._unzip_dir)
@@ -319,33 +286,23 @@ def _remove_tree(path: str, owner: int) -> None:
         shutil.rmtree(path, ignore_errors=True)
 
 
-_CACHE: dict[tuple[str, str | None, int, int], Simulator | HostedSimulator] = {}
+_CACHE: dict[tuple[tuple[str, str, str], int], Simulator | HostedSimulator] = {}
 _CACHE_PID = os.getpid()
-_ALIASES: dict[str, Path] = {}
-_UNRELIABLE: set[tuple[str, str | None]] = set()
+_UNRELIABLE: set[tuple[str, str, str]] = set()
+_BY_FILE: dict[tuple[str, int, int, str | None], FmuModel] = {}
 
 
-def register_fmu_copy(path: str | Path, local_copy: Path) -> None:
-    """Make :func:`get_simulator` open ``local_copy`` whenever it is asked for ``path``.
-
-    Used on remote workers (dask) that do not see the submitting machine's files: the FMU's
-    bytes travel with the work and are written to a local file once.
-    """
-    _ALIASES[str(path)] = local_copy
-
-
-def mark_reset_unreliable(path: str | Path, interface: str | None = None) -> None:
+def mark_reset_unreliable(model: FmuModel) -> None:
     """Record that the FMU's reset is unreliable: :func:`get_simulator` hosts it from now on.
 
     The record holds in this process and in the worker processes it forks later.
     """
-    resolved = _ALIASES.get(str(path), Path(path)).resolve()
-    _UNRELIABLE.add((str(resolved), INTERFACES.get(interface, interface)))
+    _UNRELIABLE.add(model.key)
 
 
-def fmu_summary(path: str | Path, interface: str | None = None) -> dict[str, str]:
-    """Say how fmuid runs the FMU at ``path``: FMI version, interface, input handling, reset."""
-    simulator = get_simulator(path, interface)
+def fmu_summary(fmu: FmuModel | str | Path, interface: str | None = None) -> dict[str, str]:
+    """Say how fmuid runs the FMU: FMI version, interface, input handling, reset."""
+    simulator = get_simulator(fmu, interface)
     return {
         "fmi_version": simulator.model.fmi_version,
         "interface": simulator.model.interface,
@@ -354,18 +311,46 @@ def fmu_summary(path: str | Path, interface: str | None = None) -> dict[str, str
     }
 
 
-def get_simulator(path: str | Path, interface: str | None = None) -> Simulator | HostedSimulator:
-    """Return this thread's simulator for ``path``, creating it on first use.
+def _file_model(path: str | Path, interface: str | None) -> FmuModel:
+    """Return the model of the file at ``path`` for a caller that holds only the path.
+
+    Parsed again only when the file changes (its modification time or size), so that such a
+    caller, e.g. a script simulating in a loop, does not parse the FMU on every run.
+    """
+    try:
+        st = Path(path).stat()
+    except OSError as exc:
+        raise FmuError(f"FMU {path} does not exist") from exc
+    key = (
+        str(Path(path).resolve()),
+        st.st_mtime_ns,
+        st.st_size,
+        INTERFACES.get(interface, interface),
+    )
+    model = _BY_FILE.get(key)
+    if model is None:
+        model = FmuModel(path, interface)
+        if len(_BY_FILE) >= FILE_MODELS:
+            _BY_FILE.pop(next(iter(_BY_FILE)))
+        _BY_FILE[key] = model
+    return model
+
+
+def get_simulator(
+    fmu: FmuModel | str | Path, interface: str | None = None
+) -> Simulator | HostedSimulator:
+    """Return this thread's simulator of the FMU, creating it on first use.
 
     FMU instances are not thread-safe, so each thread of a process (e.g. a dask worker with
-    several threads) gets its own. The cache key is the resolved path, the interface, the
-    file's modification time and the thread, so a rebuilt FMU gets a fresh simulator (the old
-    one is closed). A forked child starts with an empty cache. An FMU whose reset was found
+    several threads) gets its own. The cache key is the model's :attr:`~FmuModel.key` (its
+    checksum, file and interface) and the thread, so a rebuilt FMU gets a fresh simulator (the
+    old one is closed). A forked child starts with an empty cache. An FMU whose reset was found
     unreliable (by the simulator's first run or by :func:`mark_reset_unreliable`) gets a
     :class:`~fmuid.model.host.HostedSimulator`: a fresh instance per run, in a process replaced
     every ``FMUID_RECYCLE_RUNS`` runs.
 
-    ``path`` and ``interface`` are as for :class:`SimulatorBase`.
+    ``fmu`` and ``interface`` are as for :class:`SimulatorBase`; the engine hands on the parsed
+    model (a file given by path is parsed again only when it changes).
     """
     from fmuid.model.host import HostedSimulator  # host imports this module
 
@@ -373,25 +358,21 @@ def get_simulator(path: str | Path, interface: str | None = None) -> Simulator |
     if _CACHE_PID != os.getpid():
         _CACHE.clear()
         _CACHE_PID = os.getpid()
-    resolved = _ALIASES.get(str(path), Path(path)).resolve()
-    try:
-        mtime = resolved.stat().st_mtime_ns
-    except OSError as exc:
-        raise FmuError(f"FMU {path} does not exist") from exc
+    model = as_model(fmu, interface) if isinstance(fmu, FmuModel) else _file_model(fmu, interface)
     thread = threading.get_ident()
-    wanted = INTERFACES.get(interface, interface)  # FMI's name; None: auto
-    key = (str(resolved), wanted, mtime, thread)
+    key = (model.key, thread)
     simulator = _CACHE.get(key)
     if isinstance(simulator, Simulator) and (
-        simulator.reset_reliable is False or key[:2] in _UNRELIABLE
+        simulator.reset_reliable is False or model.key in _UNRELIABLE
     ):
-        mark_reset_unreliable(resolved, wanted)
+        mark_reset_unreliable(model)
         _CACHE.pop(key).close()
         simulator = None
     if simulator is None:
-        for old_key in [k for k in _CACHE if k[:2] == key[:2] and k[3] == thread]:
-            _CACHE.pop(old_key).close()
-        hosted = (str(resolved), wanted) in _UNRELIABLE
-        simulator = (HostedSimulator if hosted else Simulator)(resolved, wanted)
+        _, path, wanted = model.key
+        for old in [k for k in _CACHE if k[0][1:] == (path, wanted) and k[1] == thread]:
+            _CACHE.pop(old).close()
+        hosted = model.key in _UNRELIABLE
+        simulator = (HostedSimulator if hosted else Simulator)(model)
         _CACHE[key] = simulator
     return simulator

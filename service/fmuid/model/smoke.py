@@ -10,7 +10,6 @@ objective's noise floor and its jumps along each parameter.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -56,7 +55,7 @@ class ModelHealth:
         return asdict(self)
 
 
-def model_health(path: Path, model: FmuModel, stop: float | None) -> ModelHealth:
+def model_health(model: FmuModel, stop: float | None) -> ModelHealth:
     """Run the FMU at its start values and report what the runs showed (module docstring)."""
     t0 = 0.0
     t1 = stop if stop is not None and stop > t0 else t0 + HORIZON
@@ -70,7 +69,7 @@ def model_health(path: Path, model: FmuModel, stop: float | None) -> ModelHealth
     horizon = (t0, float(t1))
     simulator: Simulator | None = None
     try:
-        simulator = Simulator(path, model.interface)
+        simulator = Simulator(model)
         runs = [
             simulator.simulate({}, np.array([t0, t1]), inputs, times, outputs) for _ in range(2)
         ]

@@ -143,7 +143,7 @@ def profile_problem(
     sims += problem.simulations - s0
     fit_check["valleys"] = len(valleys)
     if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
-        fit = replace(fit, fmu_info=fmu_summary(problem.fmu_path, problem.spec.interface))
+        fit = replace(fit, fmu_info=fmu_summary(problem.model))
     return ProfileResult(
         fit=fit,
         confidence=conf,

@@ -171,12 +171,12 @@ def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
     predictor = problem.predictor
     if not isinstance(predictor, FmuPredictor):
         return None
-    if get_simulator(problem.fmu_path, predictor.interface).reset_reliable is False:
+    if get_simulator(predictor.model).reset_reliable is False:
         return False
     values = {**predictor.fixed, **problem.from_z(z_hat)}
     reused = problem.predict(problem.from_z(z_hat))
     try:
-        sim = Simulator(problem.fmu_path, predictor.interface, reset_reliable=False)
+        sim = Simulator(predictor.model, reset_reliable=False)
     except FmuidError:
         return False
     try:
@@ -188,7 +188,7 @@ def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
                 np.array_equal(y[:, j], out[o], equal_nan=True)
                 for j, o in enumerate(problem.outputs)
             ):
-                mark_reset_unreliable(problem.fmu_path, predictor.interface)
+                mark_reset_unreliable(predictor.model)
                 return False
     except FmuidError:
         return False

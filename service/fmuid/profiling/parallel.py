@@ -2,22 +2,23 @@
 
 from __future__ import annotations
 
-import functools
-import hashlib
 import multiprocessing
 import os
+import pickle
 import queue
 import tempfile
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from fmuid.errors import FmuError
 from fmuid.estimation.problem import Problem
-from fmuid.model.simulator import get_simulator, mark_reset_unreliable, register_fmu_copy
+from fmuid.model.fmu import FmuFile, FmuModel, load_model
+from fmuid.model.simulator import get_simulator, mark_reset_unreliable
 from fmuid.profiling.branch import BranchResult, settle_branch
 from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 from fmuid.profiling.walk import WalkOptions
@@ -73,15 +74,18 @@ def run_branch(task: BranchTask) -> BranchResult:
     return task.walk(on_point)
 
 
-def _init_worker(progress_queue: Any, owner: int, problem: Problem, unreliable: bool) -> None:
-    """Set up a pool worker: die with the parent, report points, know the reset verdict.
+def _init_worker(progress_queue: Any, owner: int, fmu: FmuFile, unreliable: bool) -> None:
+    """Set up a pool worker: die with the parent, parse the FMU once, know the reset verdict.
 
-    Forkserver workers do not inherit the owner's verdict on the FMU's reset: it is passed.
+    The worker parses the FMU here, from the file and checksum the parent hands it; the tasks'
+    pickled problems then find this model (:func:`fmuid.model.fmu.load_model`). Forkserver
+    workers do not inherit the owner's verdict on the FMU's reset: it is passed.
     """
     global _PROGRESS_QUEUE
     die_with_pool_owner(owner)
+    model = load_model(fmu)
     if unreliable:
-        mark_reset_unreliable(problem.fmu_path, problem.spec.interface)
+        mark_reset_unreliable(model)
     _PROGRESS_QUEUE = progress_queue
 
 
@@ -126,8 +130,8 @@ def run_branches(
         return out
     # forkserver, not fork: this process may have threads (BLAS, a job's watchdog); the server
     # dies with this process, and its workers with it (see fmuid.profiling.pool_guard)
-    problem = tasks[0].problem
-    unreliable = get_simulator(problem.fmu_path, problem.spec.interface).reset_reliable is False
+    model = tasks[0].problem.model
+    unreliable = get_simulator(model).reset_reliable is False
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["fmuid.profiling.forkserver_guard", __name__])
     os.environ[POOL_PARENT_ENV] = str(os.getpid())
@@ -136,7 +140,7 @@ def run_branches(
         n,
         mp_context=ctx,
         initializer=_init_worker,
-        initargs=(progress_queue, os.getpid(), problem, unreliable),
+        initargs=(progress_queue, os.getpid(), model.file, unreliable),
     ) as pool:
         futures: list[Future[BranchResult]] = [pool.submit(run_branch, t) for t in tasks]
         pending = set(futures)
@@ -162,17 +166,19 @@ def _run_dask(
 ) -> list[BranchResult]:
     from distributed import as_completed
 
-    problem = tasks[0].problem
+    model = tasks[0].problem.model
     # the FMU's bytes travel with each task, not scattered: a task whose worker dies is run
-    # again elsewhere, while scattered data lost with its worker cancels the tasks that need it
-    fmu_blob = Path(problem.fmu_path).read_bytes()
-    unreliable = get_simulator(problem.fmu_path, problem.spec.interface).reset_reliable is False
+    # again elsewhere, while scattered data lost with its worker cancels the tasks that need it;
+    # the task travels pickled, to be read once the FMU is in place on the worker
+    fmu_blob = model.path.read_bytes()
+    unreliable = get_simulator(model).reset_reliable is False
     futures = [
         client.submit(
-            run_branch_anywhere, t, problem.model.sha256, fmu_blob, unreliable, pure=False
+            run_branch_anywhere, PickledTask(model.file, pickle.dumps(t)), model.sha256,
+            fmu_blob, unreliable, pure=False,
         )
         for t in tasks
-    ]
+    ]  # fmt: skip
     index = {f.key: k for k, f in enumerate(futures)}
     results: list[BranchResult | None] = [None] * len(tasks)
     for future in as_completed(futures):
@@ -184,41 +190,52 @@ def _run_dask(
     return [r for r in results if r is not None]
 
 
+@dataclass(frozen=True)
+class PickledTask:
+    """A pickled task and the FMU its problem needs, loaded before the task is unpickled."""
+
+    fmu: FmuFile
+    task: bytes
+
+    def load(self, fmu_bytes: bytes) -> tuple[FmuModel, Any]:
+        """Parse the FMU once on this worker (from ``fmu_bytes`` if needed); then the task."""
+        return load_here(self.fmu, fmu_bytes), pickle.loads(self.task)
+
+
 def run_branch_anywhere(
-    task: BranchTask, sha256: str, fmu_bytes: bytes, reset_unreliable: bool = False
+    task: BranchTask | PickledTask, sha256: str, fmu_bytes: bytes, reset_unreliable: bool = False
 ) -> BranchResult:
     """Walk a branch on a worker that may not see the FMU file: use a local copy if needed.
 
-    ``reset_unreliable`` carries the submitting process's verdict on the FMU's reset (its
-    workers do not inherit it, as forked local workers do).
+    ``task`` is a task, or one pickled (as dask sends it: its problem's model is found once the
+    FMU is in place). ``reset_unreliable`` carries the submitting process's verdict on the
+    FMU's reset (its workers do not inherit it, as forked local workers do).
     """
-    use_fmu_here(task.problem.fmu_path, sha256, fmu_bytes)
+    branch: BranchTask = task.load(fmu_bytes)[1] if isinstance(task, PickledTask) else task
+    model = branch.problem.model
+    if model.sha256 != sha256:
+        raise FmuError(f"{model.path}: sha256 {model.sha256[:12]}..., expected {sha256[:12]}...")
     if reset_unreliable:
-        mark_reset_unreliable(task.problem.fmu_path, task.problem.spec.interface)
-    return run_branch(task)
+        mark_reset_unreliable(model)
+    return run_branch(branch)
 
 
-def use_fmu_here(fmu_path: str | Path, sha256: str, fmu_bytes: bytes) -> None:
-    """Make ``fmu_path`` open the FMU of ``sha256`` on this worker: a local copy if it differs."""
-    path = Path(fmu_path)
-    if _file_sha256(path) != sha256:
-        local = Path(tempfile.gettempdir()) / "fmuid-fmus" / sha256 / path.name
-        if _file_sha256(local) != sha256:
-            local.parent.mkdir(parents=True, exist_ok=True)
-            tmp = local.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_bytes(fmu_bytes)
-            tmp.replace(local)
-        register_fmu_copy(path, local)
+def load_here(fmu: FmuFile, fmu_bytes: bytes) -> FmuModel:
+    """Return this worker's model of ``fmu``: from its file, or from a local copy of the bytes.
 
-
-@functools.lru_cache(maxsize=64)
-def _sha256_cached(path: str, mtime_ns: int, size: int) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def _file_sha256(path: Path) -> str | None:
+    The FMU is parsed (and hashed) once per process: a worker that does not see the file, or
+    sees another file at its path, writes ``fmu_bytes`` to a local copy and parses that.
+    """
     try:
-        st = path.stat()
-    except OSError:
-        return None
-    return _sha256_cached(str(path), st.st_mtime_ns, st.st_size)
+        return load_model(fmu)
+    except FmuError:  # not on this machine, or another file at that path
+        local = Path(tempfile.gettempdir()) / "fmuid-fmus" / fmu.sha256 / Path(fmu.path).name
+    copy = replace(fmu, path=str(local))
+    try:
+        return load_model(copy)
+    except FmuError:  # no copy yet, or a stale one
+        local.parent.mkdir(parents=True, exist_ok=True)
+        tmp = local.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_bytes(fmu_bytes)
+        tmp.replace(local)
+    return load_model(copy)

@@ -46,9 +46,9 @@ def write_report(
 
     The page holds a summary table (per parameter: estimate, simultaneous and pointwise CI,
     label, bounds), the study's numbers (chi2, number of data, thresholds, sigma and how it was
-    obtained, cost), the structural check, then the figures. When a fitting problem is given,
-    or can be built from ``fmu``, ``experiments`` and ``spec``, the fit overlay with residual
-    diagnostics and (for a profile) the trajectory band are drawn too. A diagnosis (any object
+    obtained, cost), the structural check, then the figures. With the fitting problem the
+    engine computed the result on, the fit overlay with residual diagnostics and (for a
+    profile) the trajectory band are drawn too. A diagnosis (any object
     whose ``to_dict()`` follows the contract's "Diagnose result") shows its summary and the
     figures of ``fmuid.plots.diagnosis_figures``.
 
@@ -59,9 +59,11 @@ def write_report(
     directory
         Folder for ``index.html`` and the PNG files (created if missing).
     fmu, experiments, spec
-        The study's inputs, to build the problem when ``problem`` is not given.
+        The study's inputs, for a caller that does not have the problem (e.g. a process that
+        draws a stored result): it is built from them once, here.
     problem
-        The fitting problem the result was computed on.
+        The fitting problem the engine computed the result on (``fmuid.stages.make_problem``);
+        hand it on when you have it, so that nothing (FMU, sigma estimate) is derived again.
     extra_figures
         More figures to append, by caption.
 

@@ -1,0 +1,55 @@
+"""What every simulator of an FMU has: the parsed model and how inputs reach it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from fmuid.model.exchange import RTOL
+from fmuid.model.fmu import FmuModel
+
+INPUT_STEP = 1e-3
+"""Default longest sub-step [s] over which a co-simulation FMU without input derivatives holds
+an input (the linear input is sampled at each sub-step's start)."""
+
+
+def as_model(fmu: FmuModel | str | Path, interface: str | None = None) -> FmuModel:
+    """Return ``fmu`` driving ``interface`` (None: as it is), parsing it only if it is a path."""
+    if isinstance(fmu, FmuModel):
+        return fmu if interface is None else fmu.with_interface(interface)
+    return FmuModel(fmu, interface)
+
+
+class SimulatorBase:
+    """What every simulator of an FMU has: the parsed FMU and how inputs reach it.
+
+    Parameters
+    ----------
+    fmu
+        The parsed FMU (:class:`FmuModel`), or a ``.fmu`` file to parse.
+    interface
+        ``"co_simulation"``, ``"model_exchange"`` or ``"auto"`` (as :class:`FmuModel`); None:
+        the model's own (for a file: auto).
+    input_step
+        Longest sub-step [s] for co-simulation FMUs without input derivatives.
+
+    """
+
+    def __init__(
+        self,
+        fmu: FmuModel | str | Path,
+        interface: str | None = None,
+        input_step: float = INPUT_STEP,
+    ) -> None:
+        self.model = as_model(fmu, interface)
+        self.path = self.model.path
+        self.input_step = float(input_step)
+
+    @property
+    def input_handling(self) -> str:
+        """How inputs reach this FMU between their samples (for results and logs)."""
+        model = self.model
+        if not model.is_cosimulation:
+            return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
+        if model.can_interpolate_inputs:
+            return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
+        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
