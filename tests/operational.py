@@ -32,7 +32,7 @@ from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
 from fmuid.model.builtin import builtin_fmu
-from fmuid.model.simulator import get_simulator
+from fmuid.model.registry import get_simulator
 from fmuid.stages import make_problem
 
 OUTPUTS = ("gam_t", "gam_i")

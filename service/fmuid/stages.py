@@ -9,16 +9,17 @@ from typing import Any
 
 import numpy as np
 
-from fmuid.data import Experiment, Spec, check_against_model
+from fmuid.data import Experiment, Spec
 from fmuid.errors import DataError, FmuError, SpecError
 from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
+from fmuid.estimation.study import make_problem
 from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel
-from fmuid.model.simulator import get_simulator
+from fmuid.model.registry import get_simulator
 from fmuid.profiling.engine import profile_problem
 from fmuid.profiling.result import ProfileResult
 from fmuid.progress import ProgressCallback
@@ -131,34 +132,6 @@ def _input_at(
     if held:
         return np.asarray(values[np.searchsorted(input_time, time, side="right") - 1])
     return np.interp(time, input_time, values)
-
-
-def make_problem(
-    fmu: str | Path | FmuModel, experiments: Sequence[Experiment], spec: Spec
-) -> Problem:
-    """Check the spec and the experiments against the FMU and build the estimation problem.
-
-    Raises
-    ------
-    FmuError, SpecError, DataError
-        When the FMU cannot be used (its binary is loaded and instantiated here), or the spec
-        or data do not fit its variables.
-
-    ``fmu`` is a parsed FMU (:class:`FmuModel`, handed on as it is), an FMU file or the name
-    of a built-in model (e.g. ``"msd"``).
-    """
-    model = fmu if isinstance(fmu, FmuModel) else FmuModel(resolve_fmu(fmu))
-    wrong_interface = model.interface_problem(spec.interface)
-    if wrong_interface:
-        raise SpecError(f"{spec.source}: interface: {wrong_interface}")
-    model = model.with_interface(spec.interface)
-    check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
-    free = [*spec.parameters, *(n for p in spec.physics.values() for n in p.parameters)]
-    problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
-    if problems:
-        raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
-    get_simulator(model)
-    return Problem(model.path, experiments, spec, model=model)
 
 
 def fit(

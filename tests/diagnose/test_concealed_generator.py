@@ -20,7 +20,7 @@ import operational as op
 from fmuid.data import Experiment, ParameterSpec
 from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.problem import Problem
-from fmuid.model.simulator import get_simulator
+from fmuid.model.registry import get_simulator
 
 
 def ljung_box_p(x: np.ndarray) -> float:

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from fmuid.errors import FmuError
-from fmuid.model.simulator import Simulator, get_simulator
+from fmuid.model.registry import get_simulator
+from fmuid.model.simulator import Simulator
 
 from .reference import OUTPUT_TIME, RAMP_DELTA, RAMP_TIME
 from .test_msd import step_response

@@ -28,7 +28,8 @@ from fmuid.estimation.problem import Problem
 from fmuid.model.build import build_fmu
 from fmuid.model.builtin import model_src_dir
 from fmuid.model.host import HostedSimulator
-from fmuid.model.simulator import Simulator, fmu_summary, get_simulator
+from fmuid.model.registry import fmu_summary, get_simulator
+from fmuid.model.simulator import Simulator
 from fmuid.profiling.health import check_health
 
 T = np.round(np.arange(0.0, 5.0 + 1e-9, 0.1), 10)

@@ -39,7 +39,8 @@ def diagnose(
     options
         Levels and effort (default: false-alarm level 0.01, 95% intervals).
     problem
-        The problem ``fmuid.stages.make_problem`` built of these inputs (default: built here).
+        The problem ``fmuid.estimation.study.make_problem`` built of these inputs (default:
+        built here).
 
     Returns
     -------
@@ -47,7 +48,7 @@ def diagnose(
         ``.to_dict()`` gives the contract's JSON.
 
     """
-    from fmuid.stages import make_problem
+    from fmuid.estimation.study import make_problem
 
     problem = problem or make_problem(fmu_path, experiments, spec)
     return diagnose_problem(problem, options=options, progress=progress)

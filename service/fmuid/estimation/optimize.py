@@ -16,7 +16,7 @@ from scipy.optimize import least_squares, minimize
 from fmuid.errors import FmuError
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
-from fmuid.model.simulator import fmu_summary
+from fmuid.model.registry import fmu_summary
 from fmuid.progress import Progress, ProgressCallback
 
 log = logging.getLogger(__name__)

@@ -11,7 +11,7 @@ import numpy as np
 from fmuid.data import Experiment
 from fmuid.model.base import as_model
 from fmuid.model.fmu import FmuModel
-from fmuid.model.simulator import get_simulator
+from fmuid.model.registry import get_simulator
 
 
 class Predictor(Protocol):

@@ -16,7 +16,7 @@ from scipy.signal import lfilter
 
 from fmuid.data import Experiment
 from fmuid.estimation.predictor import FmuPredictor
-from fmuid.model.simulator import get_simulator
+from fmuid.model.registry import get_simulator
 
 INPUT_STEP = 0.02
 """Grid step [s] of a lagged input handed to the FMU (at most half the data's interval)."""

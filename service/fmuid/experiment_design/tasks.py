@@ -16,7 +16,7 @@ from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from typing import Any, TypeVar
 
 from fmuid.model.fmu import FmuFile, FmuModel, load_model
-from fmuid.model.simulator import get_simulator, mark_reset_unreliable
+from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.profiling.parallel import PickledTask
 from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 

@@ -3,7 +3,8 @@
 from fmuid.model.build import build_fmus
 from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu, fmu_dir, model_src_dir
 from fmuid.model.fmu import FmuModel, Variable
-from fmuid.model.simulator import Simulator, get_simulator
+from fmuid.model.registry import get_simulator
+from fmuid.model.simulator import Simulator
 
 __all__ = [
     "BUILTIN_MODELS",

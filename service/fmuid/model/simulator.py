@@ -3,8 +3,8 @@
 One instance per simulator, reset between runs; each run is a deterministic function of the
 parameters and inputs (no state carried over). The first successful run is repeated after a
 reset and compared with the run on the fresh instance: if they differ, the reset is taken as
-unreliable and every later run gets a fresh instance. :func:`get_simulator` then moves the FMU
-into a separate process that is replaced after a set number of runs
+unreliable and every later run gets a fresh instance. :func:`fmuid.model.registry.get_simulator`
+then moves the FMU into a separate process that is replaced after a set number of runs
 (:class:`fmuid.model.host.HostedSimulator`), since some exporters fail after about a thousand
 instantiations in one process.
 """
@@ -15,33 +15,27 @@ import logging
 import os
 import shutil
 import tempfile
-import threading
 import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import fmpy
 import numpy as np
 
 from fmuid.errors import FmuError
-from fmuid.model.base import INPUT_STEP, SimulatorBase, as_model
+from fmuid.model.base import INPUT_STEP, SimulatorBase
 from fmuid.model.channels import Channels
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
-from fmuid.model.fmu import INTERFACES, USABLE, FmuModel, Variable
+from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan, make_plan
-
-if TYPE_CHECKING:
-    from fmuid.model.host import HostedSimulator
 
 logger = logging.getLogger(__name__)
 
 PLAN_CACHE = 32
 """Run plans kept per simulator (one per experiment of a study, typically)."""
-FILE_MODELS = 16
-"""Models kept for callers of :func:`get_simulator` that hold only a path."""
 
 
 class Simulator(SimulatorBase):
@@ -284,95 +278,3 @@ def _remove_tree(path: str, owner: int) -> None:
     """Delete the extracted FMU, unless this is a forked copy of its owner (which still uses it)."""
     if os.getpid() == owner:
         shutil.rmtree(path, ignore_errors=True)
-
-
-_CACHE: dict[tuple[tuple[str, str, str], int], Simulator | HostedSimulator] = {}
-_CACHE_PID = os.getpid()
-_UNRELIABLE: set[tuple[str, str, str]] = set()
-_BY_FILE: dict[tuple[str, int, int, str | None], FmuModel] = {}
-
-
-def mark_reset_unreliable(model: FmuModel) -> None:
-    """Record that the FMU's reset is unreliable: :func:`get_simulator` hosts it from now on.
-
-    The record holds in this process and in the worker processes it forks later.
-    """
-    _UNRELIABLE.add(model.key)
-
-
-def fmu_summary(fmu: FmuModel | str | Path, interface: str | None = None) -> dict[str, str]:
-    """Say how fmuid runs the FMU: FMI version, interface, input handling, reset."""
-    simulator = get_simulator(fmu, interface)
-    return {
-        "fmi_version": simulator.model.fmi_version,
-        "interface": simulator.model.interface,
-        "input_handling": simulator.input_handling,
-        "instances": simulator.instances,
-    }
-
-
-def _file_model(path: str | Path, interface: str | None) -> FmuModel:
-    """Return the model of the file at ``path`` for a caller that holds only the path.
-
-    Parsed again only when the file changes (its modification time or size), so that such a
-    caller, e.g. a script simulating in a loop, does not parse the FMU on every run.
-    """
-    try:
-        st = Path(path).stat()
-    except OSError as exc:
-        raise FmuError(f"FMU {path} does not exist") from exc
-    key = (
-        str(Path(path).resolve()),
-        st.st_mtime_ns,
-        st.st_size,
-        INTERFACES.get(interface, interface),
-    )
-    model = _BY_FILE.get(key)
-    if model is None:
-        model = FmuModel(path, interface)
-        if len(_BY_FILE) >= FILE_MODELS:
-            _BY_FILE.pop(next(iter(_BY_FILE)))
-        _BY_FILE[key] = model
-    return model
-
-
-def get_simulator(
-    fmu: FmuModel | str | Path, interface: str | None = None
-) -> Simulator | HostedSimulator:
-    """Return this thread's simulator of the FMU, creating it on first use.
-
-    FMU instances are not thread-safe, so each thread of a process (e.g. a dask worker with
-    several threads) gets its own. The cache key is the model's :attr:`~FmuModel.key` (its
-    checksum, file and interface) and the thread, so a rebuilt FMU gets a fresh simulator (the
-    old one is closed). A forked child starts with an empty cache. An FMU whose reset was found
-    unreliable (by the simulator's first run or by :func:`mark_reset_unreliable`) gets a
-    :class:`~fmuid.model.host.HostedSimulator`: a fresh instance per run, in a process replaced
-    every ``FMUID_RECYCLE_RUNS`` runs.
-
-    ``fmu`` and ``interface`` are as for :class:`SimulatorBase`; the engine hands on the parsed
-    model (a file given by path is parsed again only when it changes).
-    """
-    from fmuid.model.host import HostedSimulator  # host imports this module
-
-    global _CACHE_PID
-    if _CACHE_PID != os.getpid():
-        _CACHE.clear()
-        _CACHE_PID = os.getpid()
-    model = as_model(fmu, interface) if isinstance(fmu, FmuModel) else _file_model(fmu, interface)
-    thread = threading.get_ident()
-    key = (model.key, thread)
-    simulator = _CACHE.get(key)
-    if isinstance(simulator, Simulator) and (
-        simulator.reset_reliable is False or model.key in _UNRELIABLE
-    ):
-        mark_reset_unreliable(model)
-        _CACHE.pop(key).close()
-        simulator = None
-    if simulator is None:
-        _, path, wanted = model.key
-        for old in [k for k in _CACHE if k[0][1:] == (path, wanted) and k[1] == thread]:
-            _CACHE.pop(old).close()
-        hosted = model.key in _UNRELIABLE
-        simulator = (HostedSimulator if hosted else Simulator)(model)
-        _CACHE[key] = simulator
-    return simulator

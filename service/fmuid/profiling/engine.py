@@ -14,7 +14,7 @@ from scipy.stats import chi2 as chi2_dist
 from fmuid.estimation.optimize import FitOptions, jacobian, make_fit_result, refine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
-from fmuid.model.simulator import fmu_summary
+from fmuid.model.registry import fmu_summary
 from fmuid.profiling.branch import BranchResult
 from fmuid.profiling.checks import check_fit, distinct_valleys
 from fmuid.profiling.health import check_health

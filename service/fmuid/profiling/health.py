@@ -11,7 +11,8 @@ from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
-from fmuid.model.simulator import Simulator, get_simulator, mark_reset_unreliable
+from fmuid.model.registry import get_simulator, mark_reset_unreliable
+from fmuid.model.simulator import Simulator
 
 #: Relative step of the noise probe (scipy's default finite-difference step in fitted coordinates).
 PROBE_STEP = 1e-6

@@ -18,7 +18,7 @@ import numpy as np
 from fmuid.errors import FmuError
 from fmuid.estimation.problem import Problem
 from fmuid.model.fmu import FmuFile, FmuModel, load_model
-from fmuid.model.simulator import get_simulator, mark_reset_unreliable
+from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.profiling.branch import BranchResult, settle_branch
 from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 from fmuid.profiling.walk import WalkOptions

@@ -1,0 +1,41 @@
+"""A study's estimation problem, built once its spec and data are checked against the FMU."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from fmuid.data import Experiment, Spec, check_against_model
+from fmuid.errors import SpecError
+from fmuid.estimation.problem import Problem
+from fmuid.model.builtin import resolve_fmu
+from fmuid.model.fmu import FmuModel
+from fmuid.model.registry import get_simulator
+
+
+def make_problem(
+    fmu: str | Path | FmuModel, experiments: Sequence[Experiment], spec: Spec
+) -> Problem:
+    """Check the spec and the experiments against the FMU and build the estimation problem.
+
+    Raises
+    ------
+    FmuError, SpecError, DataError
+        When the FMU cannot be used (its binary is loaded and instantiated here), or the spec
+        or data do not fit its variables.
+
+    ``fmu`` is a parsed FMU (:class:`FmuModel`, handed on as it is), an FMU file or the name
+    of a built-in model (e.g. ``"msd"``).
+    """
+    model = fmu if isinstance(fmu, FmuModel) else FmuModel(resolve_fmu(fmu))
+    wrong_interface = model.interface_problem(spec.interface)
+    if wrong_interface:
+        raise SpecError(f"{spec.source}: interface: {wrong_interface}")
+    model = model.with_interface(spec.interface)
+    check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
+    free = [*spec.parameters, *(n for p in spec.physics.values() for n in p.parameters)]
+    problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
+    if problems:
+        raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
+    get_simulator(model)
+    return Problem(model.path, experiments, spec, model=model)
