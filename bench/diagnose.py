@@ -1,6 +1,6 @@
 """Confusion table of ``fmuid.diagnose`` on concealed, independent field-truth cases.
 
-Cases come from ``tests/concealed.py`` (the field truth of ``tests/fieldtruth.py``, scipy,
+Cases come from ``testbed/concealed.py`` (the field truth of ``testbed/fieldtruth.py``, scipy,
 independent of the FMU and of the diagnose engine): per effect, its magnitude is set per case so
 that the base fit hides it from the residuals (Ljung-Box at 5 % passes on every channel, the
 reduced chi2 is noise-sized) while the likelihood-ratio test of the true augmentation has
@@ -34,7 +34,7 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "testbed"))
 sys.path.insert(0, str(ROOT / "service"))
 
 import concealed as cc  # noqa: E402

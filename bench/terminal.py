@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "testbed"))
 sys.path.insert(0, str(ROOT / "service"))
 
 from fmuid.model.builtin import builtin_fmu  # noqa: E402

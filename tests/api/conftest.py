@@ -6,8 +6,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from api_helpers import Service, msd_csv
 
+from api_helpers import Service, msd_csv
 from fmuid.model.build import build_fmu
 from fmuid.model.builtin import builtin_fmu, model_src_dir
 

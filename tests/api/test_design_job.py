@@ -4,17 +4,13 @@ from __future__ import annotations
 
 import json
 import shutil
-import sys
-from pathlib import Path
 
 import pytest
-from api_helpers import msd_spec
 
+from api_helpers import msd_spec
+from design_cases import MSD_SPACE
 from fmuid.client import ApiError
 from fmuid.jobs.vet import VetTask, vet
-
-sys.path.insert(0, str(Path(__file__).parents[1] / "design"))
-from design_cases import MSD_SPACE  # noqa: E402
 
 
 def test_design_job_returns_ranked_designs_and_a_report(service, tmp_path, step_csv):

@@ -6,10 +6,10 @@ import json
 import time
 
 import pytest
-from api_helpers import msd_spec
 
 import fieldtruth as ft
 import fmuid
+from api_helpers import msd_spec
 from fmuid.data import load_experiment, spec_from_json
 from fmuid.model.builtin import builtin_fmu
 

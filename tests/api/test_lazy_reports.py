@@ -13,6 +13,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import httpx
 import pytest
+
 from api_helpers import msd_spec
 
 DRAWING_LINE = "drawing the report of job"

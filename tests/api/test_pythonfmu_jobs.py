@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from api_helpers import Service
 from scipy.integrate import solve_ivp
 
 import fmuid
+from api_helpers import Service
 from fmuid.data import load_experiment, spec_from_json
 
 T = np.round(np.arange(0.0, 4.0 + 1e-9, 0.1), 10)

@@ -9,6 +9,7 @@ import time
 
 import pytest
 
+from api_helpers import wipe_after_schema
 from fmuid.jobs import housekeeping as hk
 from fmuid.jobs import restarts
 from fmuid.jobs.crash import FMI_VERSION_LINE, fmi_call_in_traceback
@@ -86,12 +87,7 @@ def test_a_damaged_database_is_reported_not_hidden(tmp_path):
         store.create("fit", "{}" + " " * 2000, blob(store, b"%d" % k), "m", [])
     del store
     db = tmp_path / "jobs.sqlite"
-    with sqlite3.connect(db) as conn:
-        conn.execute("PRAGMA wal_checkpoint(TRUNCATE)")
-    size = db.stat().st_size
-    with open(db, "r+b") as stream:  # keep the first page (the schema), wipe every other
-        stream.seek(4096)
-        stream.write(b"\xa5" * (size - 4096))
+    wipe_after_schema(db)
     checks = StoreHealth(db, tmp_path, min_free_bytes=0, disk_quota_bytes=0)
     problems = checks.problems()
     assert problems and "damaged" in problems[0]

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import httpx
 import pytest
+
 from api_helpers import member, msd_spec, multipart, rewrite_fmu, zip_bomb
 
 

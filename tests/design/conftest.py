@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 
 import pytest
-from design_cases import MSD_SPEC, SMALL, space_of
 
+from design_cases import MSD_SPEC, SMALL, space_of
 from fmuid.data import spec_from_json
 from fmuid.experiment_design import design
 

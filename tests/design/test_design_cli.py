@@ -3,7 +3,6 @@
 import json
 
 from design_cases import MSD_SPACE, MSD_SPEC
-
 from fmuid.cli import main
 
 

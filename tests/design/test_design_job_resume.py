@@ -4,7 +4,6 @@ import json
 import shutil
 
 from design_cases import MSD_SPACE, MSD_SPEC, SMALL, Stop, comparable, counting
-
 from fmuid.jobs import housekeeping as hk
 from fmuid.jobs import restarts, run
 from fmuid.jobs.layout import DataLayout

@@ -4,8 +4,8 @@ import json
 import math
 
 import pytest
-from design_cases import SMALL, space_of
 
+from design_cases import SMALL, space_of
 from fmuid import load_result
 from fmuid.estimation.result import Cost
 from fmuid.experiment_design.result import DesignResult, RankedDesign

@@ -1,8 +1,8 @@
 """A design study gives the same result in one process and on two workers, and resumes."""
 
 import pytest
-from design_cases import SMALL, Stop, comparable, counting, space_of, stop_after
 
+from design_cases import SMALL, Stop, comparable, counting, space_of, stop_after
 from fmuid.experiment_design import design, tasks
 
 

@@ -4,9 +4,9 @@ import json
 
 import numpy as np
 import pytest
-from design_cases import space_of
 from scipy.integrate import solve_ivp
 
+from design_cases import space_of
 from fmuid.data import spec_from_json
 from fmuid.experiment_design import design
 from fmuid.experiment_design.fisher import sensitivity, trial_problem

@@ -4,8 +4,8 @@ import json
 
 import numpy as np
 import pytest
-from design_cases import MSD_SPACE, space_of
 
+from design_cases import MSD_SPACE, space_of
 from fmuid.errors import SpecError
 from fmuid.experiment_design.signals import Trial, input_signal, output_times, sample_trials
 from fmuid.experiment_design.space import check_space, load_space

@@ -1,6 +1,6 @@
 """The concealed-case generator makes what it promises, re-checked by independent computations.
 
-The re-check does not reuse ``tests/operational.py``: the Ljung-Box statistic comes from
+The re-check does not reuse ``testbed/operational.py``: the Ljung-Box statistic comes from
 ``numpy.correlate``, the augmentation is fitted through ``fmuid.fit`` with a predictor whose lag
 is integrated by ``scipy.signal.lsim``, and the base fit is redone from the true tires.
 """

@@ -1,28 +1,24 @@
 """Fixtures of the hardening tests: services on free loopback ports, msd data, misbehaving FMUs.
 
 The service process, the msd data and the upload helpers are those of the API tests
-(``tests/api/api_helpers.py``).
+(``tests/api_helpers.py``).
 """
 
 from __future__ import annotations
 
 import os
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 
+from api_helpers import Service, msd_csv
+from attacks import HealthWatch
+from fmuid.model.build import build_fmu
+from fmuid.model.builtin import builtin_fmu, model_src_dir
+
 HERE = Path(__file__).parent
-sys.path.insert(0, str(HERE.parent / "api"))
-sys.path.insert(0, str(HERE.parents[1] / "bench"))
-
-from api_helpers import Service, msd_csv  # noqa: E402
-
-from fmuid.model.build import build_fmu  # noqa: E402
-from fmuid.model.builtin import builtin_fmu, model_src_dir  # noqa: E402
-from input_attacks import HealthWatch  # noqa: E402
 
 HEALTH_S = 0.1
 """The documented bound on health's answer during an attack [s]."""

@@ -11,6 +11,7 @@ from typing import Any
 
 import httpx
 import pytest
+
 from api_helpers import member, msd_spec, rewrite_fmu
 
 pytestmark = pytest.mark.slow

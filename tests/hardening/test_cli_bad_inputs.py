@@ -7,9 +7,9 @@ import json
 from pathlib import Path
 
 import pytest
-from api_helpers import member, msd_spec, rewrite_fmu
 from test_bad_inputs import million_rows, model_exchange_only, with_parameter
 
+from api_helpers import member, msd_spec, rewrite_fmu
 from fmuid.cli import main
 
 GOOD_CSV = b"time,f,x\n0,40,0\n0.2,40,0.1\n0.4,40,0.3\n"

@@ -9,24 +9,14 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
-from api_helpers import msd_spec
 
 import fmuid
+from api_helpers import msd_spec, wait_until
 from fmuid.data import load_experiment, spec_from_json
 
 pytestmark = pytest.mark.slow
-
-
-def wait_until(predicate, timeout=120.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.2)
-    return False
 
 
 @pytest.fixture

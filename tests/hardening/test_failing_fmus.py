@@ -9,6 +9,7 @@ the next job on the same service succeeds.
 from __future__ import annotations
 
 import pytest
+
 from api_helpers import MSD_TRUTH, msd_spec
 
 pytestmark = pytest.mark.slow

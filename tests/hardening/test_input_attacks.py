@@ -19,17 +19,14 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+
 from api_helpers import Service, msd_csv, rewrite_fmu
-
-sys.path.insert(0, str(Path(__file__).parents[2] / "bench"))
-
-from input_attacks import (  # noqa: E402
+from attacks import (
     GOOD_CSV,
     MSD_SPEC,
     HealthWatch,

@@ -12,6 +12,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
+
 from api_helpers import msd_spec
 
 pytestmark = pytest.mark.slow

@@ -11,11 +11,11 @@ import tempfile
 
 import pytest
 import schemathesis
-from api_helpers import Service
 from hypothesis import HealthCheck, given, settings
 from schemathesis.checks import CheckFunction
 from schemathesis.specs.openapi.checks import positive_data_acceptance
 
+from api_helpers import Service
 from fmuid.api import create_app
 from fmuid.settings import Settings
 

@@ -10,12 +10,11 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
-from api_helpers import msd_spec
 
+from api_helpers import msd_spec, wait_until
 from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.proc import job_command, job_environment
 from fmuid.jobs.store import Dataset, JobStore
@@ -37,15 +36,6 @@ def tagged_processes(db: Path) -> list[int]:
         if f"FMUID_JOB_DB={db}".encode() in env and state != "Z":
             found.append(int(entry.name))
     return found
-
-
-def wait_until(predicate, timeout=120.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.1)
-    return False
 
 
 def test_sigkill_of_the_service_leaves_no_job_process(service_factory, step_csv, tmp_path):

@@ -10,9 +10,9 @@ import time
 
 import jsonschema
 import pytest
-from api_helpers import msd_spec
 from result_schemas import SCHEMAS
 
+from api_helpers import msd_spec
 from fmuid.jobs.store import JobStore
 
 pytestmark = pytest.mark.slow

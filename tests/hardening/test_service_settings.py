@@ -12,8 +12,8 @@ import time
 
 import httpx
 import pytest
-from api_helpers import Service, free_port, msd_spec
 
+from api_helpers import Service, free_port, msd_spec
 from fmuid.api.results import FitResultOut, ProfileResultOut
 from plots.toy import toy_profile_result
 

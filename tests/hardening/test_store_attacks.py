@@ -7,7 +7,6 @@ while the queue fills and while the damaged store is used (the bound of
 
 from __future__ import annotations
 
-import sqlite3
 import subprocess
 import threading
 import time
@@ -15,20 +14,11 @@ from pathlib import Path
 
 import httpx
 import pytest
-from api_helpers import msd_spec
 
-from input_attacks import HealthWatch
+from api_helpers import msd_spec, wait_until, wipe_after_schema
+from attacks import HealthWatch
 
 pytestmark = pytest.mark.slow
-
-
-def wait_until(predicate, timeout=120.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.1)
-    return False
 
 
 def submit(service, step_csv, fmu: Path | None = None) -> httpx.Response:
@@ -119,12 +109,7 @@ def test_a_damaged_database_makes_health_degraded_and_errors_json(
         client.wait(job, timeout=300)
     service.stop()
     db = data_dir / "jobs.sqlite"
-    with sqlite3.connect(db) as conn:
-        conn.execute("PRAGMA wal_checkpoint(TRUNCATE)")
-    size = db.stat().st_size
-    with open(db, "r+b") as stream:  # keep the first page (the schema), wipe the rest
-        stream.seek(4096)
-        stream.write(b"\xa5" * (size - 4096))
+    wipe_after_schema(db)
     service.start()
     state = health(service)
     assert state["status"] == "degraded", state

@@ -7,6 +7,7 @@ import json
 import os
 import signal
 import socket
+import sqlite3
 import subprocess
 import sys
 import time
@@ -165,3 +166,23 @@ def multipart(
         body.write(content + b"\r\n")
     body.write(f"--{boundary}--\r\n".encode())
     return body.getvalue(), f"multipart/form-data; boundary={boundary}"
+
+
+def wait_until(predicate, timeout: float = 120.0, period: float = 0.1) -> bool:
+    """Poll ``predicate`` every ``period`` seconds; whether it came true within ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(period)
+    return False
+
+
+def wipe_after_schema(db: Path) -> None:
+    """Damage a job database: keep its first page (the schema), overwrite every other byte."""
+    with sqlite3.connect(db) as conn:
+        conn.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    size = db.stat().st_size
+    with open(db, "r+b") as stream:
+        stream.seek(4096)
+        stream.write(b"\xa5" * (size - 4096))
