@@ -6,8 +6,9 @@
 # (pip inside a build step cannot verify the sandbox's certificate chain), installed --no-index.
 # runc is used as the runtime with explicit ulimits (the default runtime fails on setrlimit here).
 #
-# Exit status 0 when the container answered correctly, or with a line "SKIPPED: <reason>" when
-# podman cannot run containers on this machine; 1 when the image or the service is broken.
+# Exit status 0 when the container answered correctly, or with a line "SKIPPED: <reason>" when a
+# tool is truly missing (podman, debootstrap, a Debian mirror, a kernel that runs containers);
+# 1 when the image or the service is broken.
 set -euo pipefail
 
 REPO=$(cd "$(dirname "$0")/.." && pwd)
@@ -21,6 +22,7 @@ PYTHON=${PYTHON:-$REPO/.venv/bin/python}
 [ -x "$PYTHON" ] || PYTHON=python3
 
 skip() { echo "SKIPPED: $*"; exit 0; }
+fail() { echo "FAILED: $*"; exit 1; }
 log() { echo "[test-container] $*"; }
 
 # ---- tools ----------------------------------------------------------------------------------
@@ -42,9 +44,10 @@ if ! "${PODMAN[@]}" image exists "$BASE"; then
     rm -rf "$ROOTFS"
     log "debootstrap bookworm into $ROOTFS"
     debootstrap --variant=minbase --include=python3,python3-venv bookworm "$ROOTFS" \
-        >"$WORK/debootstrap.log" 2>&1 || skip "debootstrap failed (see $WORK/debootstrap.log)"
+        >"$WORK/debootstrap.log" 2>&1 \
+        || skip "no Debian mirror reachable for the base image (see $WORK/debootstrap.log)"
     tar -C "$ROOTFS" -c . | "${PODMAN[@]}" import - "$BASE" >/dev/null \
-        || skip "podman import of the base image failed"
+        || fail "podman import of the base image failed"
     rm -rf "$ROOTFS"
 fi
 "${PODMAN[@]}" run --rm "${ULIMITS[@]}" --network host "$BASE" python3 -c 'print("ok")' \
