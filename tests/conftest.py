@@ -15,6 +15,18 @@ from fmuid.model.builtin import model_src_dir
 #: where the CI variable is not set. Settings objects made in test modules inherit it.
 settings.load_profile("ci")
 
+SERVICE_FIXTURES = {"service", "service_factory"}
+"""Fixtures that start the real service (uvicorn in its own process): a test using one is slow.
+The fast run covers the routes in-process (``tests/api/test_in_process.py``)."""
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark every test that starts the real service ``slow``, before ``-m`` selects."""
+    for item in items:
+        if SERVICE_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)
+
 
 @pytest.fixture(scope="session")
 def built_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:

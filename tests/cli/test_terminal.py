@@ -172,6 +172,7 @@ def _group_alive(pgid: int) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_ctrl_c_ends_a_profile_with_130_and_leaves_no_process(tractor_fmu, tmp_path):
     args = tractor_study(tmp_path, tractor_fmu)
     proc = subprocess.Popen(

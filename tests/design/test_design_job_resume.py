@@ -3,6 +3,8 @@
 import json
 import shutil
 
+import pytest
+
 from design_cases import MSD_SPACE, MSD_SPEC, SMALL, Stop, comparable, counting
 from fmuid.jobs import housekeeping as hk
 from fmuid.jobs import restarts, run
@@ -21,6 +23,7 @@ def upload(store, source=None, text=None):
     return store.add_file(path)
 
 
+@pytest.mark.slow
 def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
     tmp_path, serial, monkeypatch
 ):

@@ -6,6 +6,7 @@ from design_cases import SMALL, Stop, comparable, counting, space_of, stop_after
 from fmuid.experiment_design import design, tasks
 
 
+@pytest.mark.slow
 def test_two_local_workers_give_the_serial_ranking_and_numbers(serial, msd_spec, monkeypatch):
     pools = []
     run_pool = tasks._run_pool
@@ -39,6 +40,7 @@ def test_a_dask_cluster_of_worker_processes_gives_the_serial_result(serial, msd_
     assert comparable(remote.to_dict()) == comparable(serial.to_dict())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("k", "stage"), [(3, "screen"), (9, "verify")])
 def test_an_interrupted_study_resumes_without_redoing_finished_evaluations(
     serial, msd_spec, tmp_path, monkeypatch, k, stage

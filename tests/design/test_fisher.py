@@ -43,6 +43,7 @@ def test_fisher_information_matches_scipy_sensitivities(msd_spec, msd_space):
     assert fisher == pytest.approx(jac.T @ jac, rel=2e-3)
 
 
+@pytest.mark.slow
 def test_predicted_widths_agree_with_profiles_on_simulated_data(msd_spec, msd_space):
     result = design("msd", msd_spec, msd_space)
     best = result.best

@@ -54,6 +54,7 @@ def _assert_concealed(fmu: Path, case: ft.Case, result: dict[str, Any]) -> None:
     assert band[0] < result["chi2_before"] < band[1], "reduced chi2 outside the noise band"
 
 
+@pytest.mark.slow
 def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
     case = ft.make_case(None, seed=11, rate=5.0)
     result = diagnose(tractor_fmu, case.experiments, study_spec()).to_dict()

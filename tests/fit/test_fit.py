@@ -62,6 +62,7 @@ def test_several_experiments_share_parameters(msd_fmu):
         assert fit.estimates[name] == pytest.approx(truth, rel=0.05)
 
 
+@pytest.mark.slow
 def test_estimated_sigma_is_close_to_the_true_noise(msd_fmu):
     data = [msd_data(f"s{i}.csv", STEP, 0.2, seed=10 + i, duration=40.0) for i in range(3)]
     problem = make_problem(

@@ -50,6 +50,7 @@ def test_nominal_all_outputs_match_solve_ivp(simulator: Simulator, case: str) ->
     assert np.max(np.abs(ref["gam_t"])) > 0.1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["ramp", "chirp"])
 def test_yaw_rates_match_solve_ivp_at_all_64_corners(simulator: Simulator, case: str) -> None:
     t_in, delta = INPUTS[case]

@@ -44,6 +44,7 @@ def assert_ends_exact(problem, result, names, kinds=("pointwise", "simultaneous"
     return errors
 
 
+@pytest.mark.slow
 def test_msd_ends_exact_at_high_noise(msd_fmu):
     """sigma 0.8: profiles far from parabolic; ends exact to well within 1 % of a half-width."""
     data = msd_step_data(**TRUTH, sigma=0.8, seed=116)

@@ -41,6 +41,7 @@ def _csv(experiment) -> bytes:
     return ("\n".join(lines) + "\n").encode()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="a profile job starts workers on 2+ CPUs")
 def test_a_profile_job_parses_the_fmu_once_per_process(msd_fmu, tmp_path):
     store = JobStore(tmp_path / "jobs.sqlite", tmp_path)

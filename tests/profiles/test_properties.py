@@ -5,6 +5,7 @@ once failed (the estimate's profile point one ulp off the estimate) is always ru
 """
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -13,6 +14,7 @@ import fmuid
 from .test_msd import msd_step_data, spec
 
 
+@pytest.mark.slow
 @settings(
     max_examples=6,
     deadline=None,

@@ -22,6 +22,7 @@ def served_report(tmp_path):
     server.server_close()
 
 
+@pytest.mark.slow
 def test_report_renders_in_chromium(served_report, tmp_path):
     url, parameters = served_report
     driver = chromium(tmp_path / "chromium-profile")

@@ -83,6 +83,7 @@ def driver(tmp_path):
     browser.quit()
 
 
+@pytest.mark.slow
 def test_profile_report_shows_units_and_no_literals(driver, msd_fmu, tmp_path):
     experiments, spec = _study(msd_fmu, lag=None)
     result = fmuid.profile(msd_fmu, experiments, spec, workers=1)
@@ -103,6 +104,7 @@ def test_profile_report_shows_units_and_no_literals(driver, msd_fmu, tmp_path):
     assert json.loads(json.dumps(result.to_dict()))["units"] == {**UNITS, "f": "N", "x": "m"}
 
 
+@pytest.mark.slow
 def test_diagnose_report_shows_units_and_no_literals(driver, msd_fmu, tmp_path):
     experiments, spec = _study(msd_fmu, lag=0.15)
     diagnosis = diagnose(msd_fmu, experiments, spec)
