@@ -1,3 +1,6 @@
+import dataclasses
+from types import SimpleNamespace
+
 import numpy as np
 
 from fmuid.demo.thesis import DESIGNS, NOMINAL, simulate_dataset, study_spec
@@ -77,12 +80,18 @@ def test_trajectory_band_uses_points_inside_the_ci(tractor_fmu):
     assert len(fig.axes[2].lines) == 2 * 4  # tractor and implement path per parameter set
 
 
-def test_band_paths_are_the_ones_the_fmu_declares(tractor_fmu):
+def test_band_paths_are_the_ones_the_fmu_declares(tractor_fmu, monkeypatch):
     problem = _problem(tractor_fmu)
     band = trajectory_band(problem, _profile_result(problem), n=10)
     (paths,) = band.paths  # one experiment
     assert list(paths.estimate) == ["tractor CG", "implement CG"]  # variables.json "paths"
     assert paths.units == ("m", "m")  # the unit of x_tc and y_tc in the variable table
+    # the axis units follow the variable table, whatever it says (a copy: the model may be shared)
+    outputs = dict(problem.model.outputs)
+    outputs["x_tc"] = dataclasses.replace(outputs["x_tc"], unit="km")
+    outputs["y_tc"] = dataclasses.replace(outputs["y_tc"], unit=None)
+    monkeypatch.setattr(problem, "model", SimpleNamespace(outputs=outputs))
+    assert trajectory_band(problem, _profile_result(problem), n=1).paths[0].units == ("km", "")
     x, y = paths.estimate["tractor CG"]
     assert x.shape == y.shape == problem.experiments[0].time.shape
     ax = trajectory_band_figure(band).axes[2]

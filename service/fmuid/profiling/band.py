@@ -47,13 +47,15 @@ class OutputBand:
 class PathBand:
     """Planar paths of one experiment: per label, ``(x, y)`` per parameter set and estimate.
 
-    ``units`` are the declared units of the first path's x and y outputs (``""`` when none).
+    ``units`` are the units of the x and y axes: :func:`trajectory_band` takes those the FMU
+    declares for the first path's outputs (``""`` when none); a band built by hand defaults to
+    metres, the SI unit of a position.
     """
 
     experiment: str
     runs: tuple[dict[str, tuple[np.ndarray, np.ndarray]], ...]
     estimate: dict[str, tuple[np.ndarray, np.ndarray]]
-    units: tuple[str, str] = ("", "")
+    units: tuple[str, str] = ("m", "m")
 
 
 @dataclass(frozen=True)
