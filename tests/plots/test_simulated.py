@@ -1,3 +1,6 @@
+import dataclasses
+from types import SimpleNamespace
+
 import numpy as np
 
 from fmuid.demo.thesis import DESIGNS, NOMINAL, simulate_dataset, study_spec
@@ -75,3 +78,21 @@ def test_trajectory_band_uses_points_inside_the_ci(tractor_fmu):
     band = [line for line in fig.axes[0].lines if line.get_gid() == "band"]
     assert len(band) == 3  # the point at chi2 120 lies outside 100 + 7.04
     assert len(fig.axes[2].lines) == 2 * 4  # tractor and implement path per parameter set
+
+
+def test_band_paths_are_the_ones_the_fmu_declares(tractor_fmu, monkeypatch):
+    problem = _problem(tractor_fmu)
+    band = trajectory_band(problem, _profile_result(problem), n=10)
+    (paths,) = band.paths  # one experiment
+    assert list(paths.estimate) == ["tractor CG", "implement CG"]  # variables.json "paths"
+    assert paths.units == ("m", "m")  # the unit of x_tc and y_tc in the variable table
+    # the axis units follow the variable table, whatever it says (a copy: the model may be shared)
+    outputs = dict(problem.model.outputs)
+    outputs["x_tc"] = dataclasses.replace(outputs["x_tc"], unit="km")
+    outputs["y_tc"] = dataclasses.replace(outputs["y_tc"], unit=None)
+    monkeypatch.setattr(problem, "model", SimpleNamespace(outputs=outputs))
+    assert trajectory_band(problem, _profile_result(problem), n=1).paths[0].units == ("km", "")
+    x, y = paths.estimate["tractor CG"]
+    assert x.shape == y.shape == problem.experiments[0].time.shape
+    ax = trajectory_band_figure(band).axes[2]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [m]", "y [m]")

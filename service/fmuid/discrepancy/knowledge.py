@@ -1,8 +1,8 @@
 """What the diagnosis knows of a model: its switchable physics and the roles of its variables.
 
-Nothing here names a model. An FMU may declare, in a ``<VendorAnnotations>`` block of its
-``modelDescription.xml``, parameters whose default value switches some physics off, and roles
-of its variables::
+Nothing here names a model. An FMU may declare, in the ``fmuid`` vendor annotation of its
+``modelDescription.xml`` (read by :mod:`fmuid.model.annotations`), parameters whose default
+value switches some physics off, and roles of its variables::
 
     <Tool name="fmuid"><Model>
       <Physics effect="side_slope" description="...">
@@ -22,11 +22,11 @@ from __future__ import annotations
 
 import logging
 import xml.etree.ElementTree as ET
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from fmuid.data import ParameterSpec, Spec
+from fmuid.model.annotations import fmuid_annotation
 
 log = logging.getLogger(__name__)
 
@@ -103,13 +103,7 @@ def read_annotations(fmu_path: str | Path) -> ModelKnowledge:
 
     A malformed annotation is logged and ignored: the FMU stays usable without it.
     """
-    try:
-        with zipfile.ZipFile(fmu_path) as archive:
-            root = ET.fromstring(archive.read("modelDescription.xml"))
-    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
-        log.warning("%s: no vendor annotations read: %s", fmu_path, exc)
-        return ModelKnowledge()
-    model = root.find("VendorAnnotations/Tool[@name='fmuid']/Model")
+    model = fmuid_annotation(fmu_path)
     if model is None:
         return ModelKnowledge()
     try:

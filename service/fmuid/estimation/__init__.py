@@ -3,5 +3,6 @@
 from fmuid.estimation.optimize import FitOptions, fit_problem
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
+from fmuid.estimation.space import ParameterSpace
 
-__all__ = ["FitOptions", "FitResult", "Problem", "fit_problem"]
+__all__ = ["FitOptions", "FitResult", "ParameterSpace", "Problem", "fit_problem"]

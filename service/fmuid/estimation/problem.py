@@ -11,14 +11,16 @@ from fmuid.data import Experiment, ParameterSpec, Spec, used_inputs
 from fmuid.errors import DataError, FmuError
 from fmuid.estimation.predictor import FmuPredictor, Predictor
 from fmuid.estimation.sigma import SPLINE_METHOD, spline_residual_sigma
+from fmuid.estimation.space import ParameterSpace
 from fmuid.model.fmu import FmuModel
 
 
 class Problem:
     """Weighted least squares of FMU outputs against one or more experiments (thesis eq. 2.20).
 
-    Parameters are fitted in coordinates ``z``: ``log10(value)`` for log-scaled parameters
-    (the default when the lower bound is positive) and the value itself otherwise.
+    Parameters are fitted in the coordinates ``z`` of its :class:`ParameterSpace` (``space``):
+    ``log10(value)`` for log-scaled parameters (the default when the lower bound is positive)
+    and the value itself otherwise.
 
     Parameters
     ----------
@@ -62,10 +64,11 @@ class Problem:
         self.spec = spec
         params = dict(parameters if parameters is not None else spec.parameters)
         self.parameter_specs = params
-        self.names = tuple(params)
-        self.scales = tuple(p.resolved_scale for p in params.values())
-        self.lower = np.array([p.lower for p in params.values()], dtype=float)
-        self.upper = np.array([p.upper for p in params.values()], dtype=float)
+        self.space = ParameterSpace.from_specs(params)
+        self.names = self.space.names
+        self.scales = self.space.scales
+        self.lower = self.space.lower
+        self.upper = self.space.upper
         self.start = np.array([p.start for p in params.values()], dtype=float)
         self.outputs = list(spec.outputs)
         inputs = sorted(
@@ -113,30 +116,24 @@ class Problem:
     @property
     def z_lower(self) -> np.ndarray:
         """Lower bounds in fitted coordinates."""
-        return self.to_z_array(self.lower)
+        return self.space.z_lower
 
     @property
     def z_upper(self) -> np.ndarray:
         """Upper bounds in fitted coordinates."""
-        return self.to_z_array(self.upper)
+        return self.space.z_upper
 
     def to_z_array(self, values: np.ndarray) -> np.ndarray:
         """Map parameter values (in ``names`` order) to fitted coordinates."""
-        values = np.asarray(values, dtype=float)
-        return np.array(
-            [np.log10(v) if s == "log" else v for v, s in zip(values, self.scales, strict=True)]
-        )
+        return self.space.to_z(values)
 
     def to_z(self, values: Mapping[str, float]) -> np.ndarray:
         """Map a name -> value mapping of the free parameters to fitted coordinates."""
-        return self.to_z_array(np.array([values[n] for n in self.names], dtype=float))
+        return self.space.to_z(values)
 
     def from_z(self, z: np.ndarray) -> dict[str, float]:
         """Map fitted coordinates back to a name -> value mapping."""
-        return {
-            n: float(10.0**zi) if s == "log" else float(zi)
-            for n, s, zi in zip(self.names, self.scales, z, strict=True)
-        }
+        return self.space.from_z(z)
 
     def units(self) -> dict[str, str]:
         """Return the unit of each free and fixed parameter, input and output the FMU declares."""

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from fmuid.estimation.space import ParameterSpace
+
 
 @dataclass(frozen=True)
 class Cost:
@@ -81,14 +83,14 @@ class FitResult:
     fmu_info: dict[str, str] = field(default_factory=dict)
     units: dict[str, str] = field(default_factory=dict)
 
+    @property
+    def space(self) -> ParameterSpace:
+        """The fitted parameters' space: names, scales and bounds."""
+        return ParameterSpace.from_bounds(self.names, self.scales, self.lower, self.upper)
+
     def z_estimate(self) -> np.ndarray:
         """Return the estimate in fitted coordinates (log10 for log-scaled parameters)."""
-        return np.array(
-            [
-                np.log10(self.estimates[n]) if s == "log" else self.estimates[n]
-                for n, s in zip(self.names, self.scales, strict=True)
-            ]
-        )
+        return self.space.to_z(self.estimates)
 
     def fisher_sd_z(self) -> dict[str, float]:
         """Return the asymptotic standard deviation of each parameter in fitted coordinates.
@@ -110,6 +112,7 @@ class FitResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form written by ``fmuid fit``."""
+        on_bound = self.space.at_bound(self.z_estimate())
         return {
             "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name, **self.fmu_info},
             "n_data": self.n_data,
@@ -123,10 +126,7 @@ class FitResult:
                     "upper": float(self.upper[n]),
                     "scale": s,
                     "unit": self.units.get(n, ""),
-                    "at_bound": bool(
-                        np.isclose(self.estimates[n], self.lower[n], rtol=1e-6)
-                        or np.isclose(self.estimates[n], self.upper[n], rtol=1e-6)
-                    ),
+                    "at_bound": n in on_bound,
                 }
                 for n, s in zip(self.names, self.scales, strict=True)
             },

@@ -222,8 +222,9 @@ def _render_annotations(parent: ET.Element, block: dict[str, Any]) -> None:
 
     Switchable physics become ``<Physics effect description>`` elements holding one
     ``<Parameter name off start lower upper .../>`` each; roles of variables (e.g. the steer
-    input) become ``<Role variable role/>``; all inside one ``<Model>`` element, as the FMI
-    schema allows one element per tool (read by :mod:`fmuid.discrepancy.knowledge`).
+    input) become ``<Role variable role/>``, planar paths (an x and a y position output)
+    ``<Path label x y/>``; all inside one ``<Model>`` element, as the FMI schema allows one
+    element per tool (read by :mod:`fmuid.model.annotations`).
     """
     tool = ET.SubElement(ET.SubElement(parent, "Tool", name="fmuid"), "Model")
     for effect, physics in block.get("physics", {}).items():
@@ -235,6 +236,8 @@ def _render_annotations(parent: ET.Element, block: dict[str, Any]) -> None:
             ET.SubElement(element, "Parameter", {"name": name, **values})
     for variable, role in block.get("roles", {}).items():
         ET.SubElement(tool, "Role", variable=variable, role=role)
+    for label, xy in block.get("paths", {}).items():
+        ET.SubElement(tool, "Path", label=label, x=xy["x"], y=xy["y"])
 
 
 def _compile(src_dir: Path, model_dir: Path, include_dir: Path, library: Path) -> None:

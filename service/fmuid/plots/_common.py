@@ -10,6 +10,8 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from fmuid.estimation.space import value_to_z
+
 AxesArg: TypeAlias = Axes | Sequence[Axes] | np.ndarray | None
 """What ``ax=`` takes: one Axes, or a sequence or array of Axes (flattened row by row)."""
 
@@ -105,7 +107,7 @@ def panels(
 
 def to_plot_coordinate(value: float, scale: str) -> float:
     """Return a parameter value in plot coordinates: log10 for log-scaled parameters."""
-    return math.log10(value) if scale == "log" else float(value)
+    return value_to_z(value, scale)
 
 
 def axis_label(name: str, scale: str, unit: str = "") -> str:

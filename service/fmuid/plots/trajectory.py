@@ -14,8 +14,9 @@ def trajectory_band_figure(band: TrajectoryBand, *, ax: AxesArg = None) -> Figur
     """Draw the outputs over parameter sets inside the simultaneous CI, with the data.
 
     One panel per experiment and fitted output against time: thin red lines for the parameter
-    sets, the estimate in black and the data as blue dots. When the band holds CG paths, one
-    more panel per experiment draws the tractor and implement paths (y against x) the same way.
+    sets, the estimate in black and the data as blue dots. When the band holds planar paths
+    (declared by the FMU, e.g. a vehicle's CG), one more panel per experiment draws them
+    (y against x) the same way.
 
     Parameters
     ----------
@@ -54,9 +55,9 @@ def trajectory_band_figure(band: TrajectoryBand, *, ax: AxesArg = None) -> Figur
             for path in paths.runs:
                 panel.plot(*path[label], color=BAND_COLOR, lw=0.8, alpha=0.35, ls=style, gid="band")
             panel.plot(x, y, color="black", lw=1.6, ls=style, label=label, gid="estimate")
-        panel.set_title(f"{paths.experiment}: CG paths", fontsize=9)
-        panel.set_xlabel("x [m]")
-        panel.set_ylabel("y [m]")
+        panel.set_title(f"{paths.experiment}: paths", fontsize=9)
+        panel.set_xlabel(unit_label("x", paths.units[0]))
+        panel.set_ylabel(unit_label("y", paths.units[1]))
         panel.legend(fontsize=7)
     if new:
         fig.suptitle(

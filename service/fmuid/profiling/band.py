@@ -10,10 +10,8 @@ import numpy as np
 
 from fmuid.data import Experiment
 from fmuid.estimation.problem import Problem
+from fmuid.model.annotations import PlanarPath, planar_paths
 from fmuid.profiling.result import ProfileResult
-
-POSITIONS = (("x_tc", "y_tc", "tractor CG"), ("x_ic", "y_ic", "implement CG"))
-"""Planar position outputs simulated as paths when the FMU has them."""
 
 
 @dataclass(frozen=True)
@@ -47,11 +45,17 @@ class OutputBand:
 
 @dataclass(frozen=True)
 class PathBand:
-    """Planar CG paths of one experiment: per label, ``(x, y)`` per parameter set and estimate."""
+    """Planar paths of one experiment: per label, ``(x, y)`` per parameter set and estimate.
+
+    ``units`` are the units of the x and y axes: :func:`trajectory_band` takes those the FMU
+    declares for the first path's outputs (``""`` when none); a band built by hand defaults to
+    metres, the SI unit of a position.
+    """
 
     experiment: str
     runs: tuple[dict[str, tuple[np.ndarray, np.ndarray]], ...]
     estimate: dict[str, tuple[np.ndarray, np.ndarray]]
+    units: tuple[str, str] = ("m", "m")
 
 
 @dataclass(frozen=True)
@@ -107,8 +111,9 @@ def parameter_sets_in_ci(result: ProfileResult, n: int = 30) -> list[dict[str, f
 def trajectory_band(problem: Problem, result: ProfileResult, *, n: int = 30) -> TrajectoryBand:
     """Simulate the fitted outputs over up to ``n`` parameter sets inside the simultaneous CI.
 
-    The sets come from :func:`parameter_sets_in_ci`. When the FMU has the CG position outputs
-    ``x_tc``, ``y_tc``, ``x_ic``, ``y_ic``, the tractor and implement paths are simulated too.
+    The sets come from :func:`parameter_sets_in_ci`. The planar paths the FMU declares in its
+    variable table (:func:`fmuid.model.annotations.planar_paths`, e.g. a vehicle's CG positions)
+    are simulated too.
 
     Parameters
     ----------
@@ -147,14 +152,21 @@ def trajectory_band(problem: Problem, result: ProfileResult, *, n: int = 30) -> 
                     problem.data[i][j],
                 )
             )
+    outputs_of_fmu = problem.model.outputs
     positions = [
-        p for p in POSITIONS if p[0] in problem.model.outputs and p[1] in problem.model.outputs
+        p for p in planar_paths(problem.fmu_path) if p.x in outputs_of_fmu and p.y in outputs_of_fmu
     ]
+    units = (
+        (outputs_of_fmu[positions[0].x].unit or "", outputs_of_fmu[positions[0].y].unit or "")
+        if positions
+        else ("", "")
+    )
     paths = tuple(
         PathBand(
             exp.name,
             tuple(_paths(problem, exp, v, positions) for v in sets),
             _paths(problem, exp, best, positions),
+            units,
         )
         for exp in (problem.experiments if positions else ())
     )
@@ -165,9 +177,9 @@ def _paths(
     problem: Problem,
     exp: Experiment,
     values: dict[str, float],
-    positions: Sequence[tuple[str, str, str]],
+    positions: Sequence[PlanarPath],
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    names = [v for p in positions for v in p[:2]]
+    names = [v for p in positions for v in (p.x, p.y)]
     full = {**dict(zip(problem.names, problem.start, strict=True)), **values}
     y = problem.predictor.predict(full, exp, names)
-    return {p[2]: (y[:, 2 * m], y[:, 2 * m + 1]) for m, p in enumerate(positions)}
+    return {p.label: (y[:, 2 * m], y[:, 2 * m + 1]) for m, p in enumerate(positions)}

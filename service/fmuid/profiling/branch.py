@@ -207,18 +207,10 @@ def _sites(
         half = abs(end.z - z_hat_i)
         quad = np.sqrt(thresholds[kind]) * sd_z
         odd = not np.isfinite(quad) or abs(half / quad - 1.0) > NON_PARABOLIC
-        on_bound = _others_on_bound(problem, index, end.point.z)
+        on_bound = bool(problem.space.at_bound(end.point.z, skip=index))
         out.append((end.point, thorough or odd or on_bound or bool(found), kind))
     out.extend((side[k], True, "jump") for k in found)
     return out
-
-
-def _others_on_bound(problem: Problem, index: int, z: np.ndarray) -> bool:
-    lo, hi = problem.z_lower, problem.z_upper
-    tol = 1e-6 * (hi - lo)
-    near = (z <= lo + tol) | (z >= hi - tol)
-    near[index] = False
-    return bool(near.any())
 
 
 def _rewalk(

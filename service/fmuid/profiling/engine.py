@@ -14,6 +14,7 @@ from scipy.stats import chi2 as chi2_dist
 from fmuid.estimation.optimize import FitOptions, jacobian, make_fit_result, refine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.space import z_to_value
 from fmuid.model.registry import fmu_summary
 from fmuid.profiling.branch import BranchResult
 from fmuid.profiling.checks import check_fit, distinct_valleys
@@ -242,7 +243,7 @@ def _assemble(
             key=lambda zp: abs(zp[0] - fit.z_estimate()[index]),
         )
         for kind, end in branch.ends.items():
-            ends[kind][k] = _value(problem, index, end.z)
+            ends[kind][k] = None if end.z is None else z_to_value(end.z, problem.scales[index])
             if kind == "simultaneous" and end.point is not None:
                 limited.update(_point(problem, index, end.point.z, end.point.chi2, None).at_bound)
     points = [p for _, p in reversed(walks[-1])] + [estimate_point] + [p for _, p in walks[1]]
@@ -309,23 +310,10 @@ def _point(
     problem: Problem, index: int, z: np.ndarray, chi2: float, error: str | None
 ) -> ProfilePoint:
     values = problem.from_z(z)
-    lo, hi = problem.z_lower, problem.z_upper
-    tol = 1e-6 * (hi - lo)
-    at_bound = tuple(
-        n
-        for k, n in enumerate(problem.names)
-        if k != index and (z[k] <= lo[k] + tol[k] or z[k] >= hi[k] - tol[k])
-    )
     return ProfilePoint(
         value=values[problem.names[index]],
         chi2=float(chi2),
         params={n: v for n, v in values.items() if n != problem.names[index]},
-        at_bound=at_bound,
+        at_bound=problem.space.at_bound(z, skip=index),
         error=error,
     )
-
-
-def _value(problem: Problem, index: int, z: float | None) -> float | None:
-    if z is None:
-        return None
-    return float(10.0**z) if problem.scales[index] == "log" else float(z)

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from fmuid.estimation.space import value_step
+
 #: A singular value below this fraction of the largest counts as zero.
 NULL_TOLERANCE = 1e-6
 #: Two components agree when their magnitudes differ by less than this fraction.
@@ -74,7 +76,7 @@ def _meaning(
     if len(involved) == 2:
         i, j = involved
         a, b = names[i], names[j]
-        lin = [v[n] * np.log(10.0) * estimates[n] if scales[n] == "log" else v[n] for n in (i, j)]
+        lin = [value_step(v[n], estimates[n], scales[n]) for n in (i, j)]
         if _same_magnitude(lin[0], lin[1]):
             return (
                 f"only {a} + {b} is identifiable"

@@ -14,6 +14,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from fmuid.estimation.space import value_to_z
 from fmuid.profiling.result import IDENTIFIABLE, ParameterProfile, ProfileResult
 from fmuid.report.page import Cell
 
@@ -209,6 +210,5 @@ def trade_partners(result: ProfileResult, name: str) -> list[tuple[str, float]]:
 
 
 def _z(value: float, scale: str, ref: float) -> float:
-    if scale == "log":
-        return math.log10(value)
-    return value / abs(ref) if ref else value
+    """Fitted coordinate of a log-scaled value; a linear value relative to ``|ref|``."""
+    return value_to_z(value / abs(ref) if scale == "lin" and ref else value, scale)

@@ -1,0 +1,65 @@
+"""The ``fmuid`` vendor annotation of an FMU: what its ``modelDescription.xml`` tells fmuid.
+
+An FMU may carry, beside its variables, a ``<VendorAnnotations>`` block for fmuid::
+
+    <Tool name="fmuid"><Model>
+      <Physics effect="..." description="..."><Parameter name="..." off="..." .../></Physics>
+      <Role variable="u" role="steer"/>
+      <Path label="vehicle CG" x="x_pos" y="y_pos"/>
+    </Model></Tool>
+
+(the built-in FMUs carry it, written from the ``fmuid`` block of their ``variables.json`` by
+:mod:`fmuid.model.build`). Switchable physics and roles are read by
+:mod:`fmuid.discrepancy.knowledge`; a ``Path`` names two position outputs that draw a planar
+path together (y against x), read here by :func:`planar_paths`.
+"""
+
+from __future__ import annotations
+
+import logging
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PlanarPath:
+    """Two position outputs of an FMU that draw one path: ``y`` against ``x``."""
+
+    label: str
+    x: str
+    y: str
+
+
+def fmuid_annotation(fmu_path: str | Path) -> ET.Element | None:
+    """Return the ``<Model>`` element of the FMU's ``fmuid`` annotation, or None when it has none.
+
+    An unreadable ``modelDescription.xml`` is logged and treated as no annotation: the FMU stays
+    usable without it.
+    """
+    try:
+        with zipfile.ZipFile(fmu_path) as archive:
+            root = ET.fromstring(archive.read("modelDescription.xml"))
+    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
+        log.warning("%s: no vendor annotations read: %s", fmu_path, exc)
+        return None
+    return root.find("VendorAnnotations/Tool[@name='fmuid']/Model")
+
+
+def planar_paths(fmu_path: str | Path) -> tuple[PlanarPath, ...]:
+    """Return the planar paths the FMU declares (none without an annotation).
+
+    A ``Path`` element missing ``label``, ``x`` or ``y`` is logged and left out.
+    """
+    model = fmuid_annotation(fmu_path)
+    paths = []
+    for element in () if model is None else model.findall("Path"):
+        a = element.attrib
+        if not all(a.get(k) for k in ("label", "x", "y")):
+            log.warning("%s: fmuid Path %s needs label, x and y: ignored", fmu_path, a)
+            continue
+        paths.append(PlanarPath(a["label"], a["x"], a["y"]))
+    return tuple(paths)
