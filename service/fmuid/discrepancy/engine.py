@@ -186,6 +186,7 @@ def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
         only=list(tie.candidate.names),
         workers=run.opts.workers,
         options=run.opts.walk,
+        confidence=run.opts.ci_confidence,
     )
     run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
     return {
@@ -221,7 +222,7 @@ def _scan_base(
 ) -> tuple[FitResult, Scanner, list[CandidateFit], list[float]]:
     """Scan the catalogue on the base fit (once more if a candidate revealed a better base)."""
     for _ in range(2):
-        scanner = Scanner(run.problem, fit.z_estimate(), fit.jacobian, run.opts.ci_confidence)
+        scanner = Scanner(run.problem, fit.z_estimate(), fit.jacobian)
         fits, adjusted = run.scan_round(scanner, cands, 1)
         best = fits[0]
         if not best.fitted or best.p_value >= run.opts.screen_level:
@@ -310,7 +311,7 @@ def diagnose_problem(
     second: str | None = None
     if significant and rt.holm(tests_after, opts.alpha):
         pool = [c for c in cands if c is not best.candidate]
-        on_top = Scanner(aug, z, final_fit.jacobian, opts.ci_confidence)
+        on_top = Scanner(aug, z, final_fit.jacobian)
         fits2, adjusted2 = run.scan_round(on_top, pool, 2)
         scores += [_score(f, a) for f, a in zip(fits2, adjusted2)]
         top = fits2[0] if fits2[0].fitted else on_top.fit(fits2[0], opts.fit)
@@ -353,8 +354,9 @@ def diagnose_problem(
     # 5. profile the added parameters, then the original ones before and after
     added = [p for c in applied for p in c.parameters]
     prof = profile_problem(
-        aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk
-    )
+        aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk,
+        confidence=opts.ci_confidence,
+    )  # fmt: skip
     run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
     estimates = {
@@ -367,7 +369,7 @@ def diagnose_problem(
     run.report("profiles of the added parameters")
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:
-        at_study = augmented(problem, applied, problem.spec.confidence)
+        at_study = augmented(problem, applied)
         absorbed_by, sims = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
         run.profiled(at_study, sims)
         run.report("profiles of the original parameters before and after")

@@ -117,7 +117,7 @@ def sensitivity_basis(jacobian: np.ndarray) -> np.ndarray:
     return u[:, s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
 
 
-def augmented(root: Problem, candidates: Sequence[Candidate], confidence: float) -> Problem:
+def augmented(root: Problem, candidates: Sequence[Candidate]) -> Problem:
     """Return the root problem with the candidates' parameters added and wrappers applied."""
     params = dict(root.parameter_specs)
     wrappers: dict[str, tuple[str, str | None]] = {}
@@ -133,9 +133,8 @@ def augmented(root: Problem, candidates: Sequence[Candidate], confidence: float)
     predictor = AugmentedPredictor(base, wrappers) if wrappers and isinstance(
         base, FmuPredictor
     ) else base  # fmt: skip
-    spec = root.spec.model_copy(update={"confidence": confidence})
     return Problem(
-        root.fmu_path, root.experiments, spec, predictor=predictor, parameters=params,
+        root.fmu_path, root.experiments, root.spec, predictor=predictor, parameters=params,
         sigma=root.sigma, sigma_method=root.sigma_method, model=root.model,
     )  # fmt: skip
 
@@ -178,12 +177,10 @@ class Scanner:
         Its best fit (fitted coordinates).
     jacobian
         Sensitivities of its weighted predictions at ``z`` (``n_data x n_free``).
-    confidence
-        Level of the augmented problems' intervals.
 
     """
 
-    def __init__(self, problem: Problem, z: np.ndarray, jacobian: np.ndarray, confidence: float):
+    def __init__(self, problem: Problem, z: np.ndarray, jacobian: np.ndarray):
         self.problem = problem
         self.z = np.asarray(z, dtype=float)
         self.values = problem.from_z(self.z)
@@ -191,7 +188,6 @@ class Scanner:
         self.chi2 = float(self.r0 @ self.r0)
         self.jac = np.asarray(jacobian, dtype=float)
         self.basis = sensitivity_basis(self.jac)
-        self.confidence = confidence
 
     def project(self, v: np.ndarray) -> np.ndarray:
         """``(I - P) v``: what no move of the base parameters reproduces."""
@@ -202,7 +198,7 @@ class Scanner:
 
     def screen(self, candidate: Candidate, stage: int = 1) -> CandidateFit:
         """Linearised screen of one candidate (see the module docstring)."""
-        aug = augmented(self.problem, [candidate], self.confidence)
+        aug = augmented(self.problem, [candidate])
         params = candidate.parameters
         probes = {p.name: _probe(p) for p in params}
         off = {p.name: p.off for p in params}

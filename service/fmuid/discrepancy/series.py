@@ -55,7 +55,7 @@ def augmented_problem_of(problem: Problem, diagnosis: Diagnosis) -> Problem:
     cands = study_catalogue(problem)
     added = set(diagnosis.added_parameters)
     chosen = [c for c in cands if set(c.names) <= added]
-    return augmented(problem, chosen, problem.spec.confidence)
+    return augmented(problem, chosen)
 
 
 def diagnosis_series(

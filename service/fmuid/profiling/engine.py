@@ -50,6 +50,7 @@ def profile_problem(
     executor: Any = None,
     progress: ProgressCallback | None = None,
     options: WalkOptions = WalkOptions(),
+    confidence: float | None = None,
 ) -> ProfileResult:
     """Profile likelihoods of the free parameters around a fit.
 
@@ -78,6 +79,8 @@ def profile_problem(
         Receives ``Progress("profile", done, total, detail)`` after every point.
     options
         Walk, end and check settings.
+    confidence
+        Level of the intervals (default: the spec's ``confidence``).
 
     Returns
     -------
@@ -86,7 +89,7 @@ def profile_problem(
     """
     t0 = time.perf_counter()
     sims = fit.cost.simulations
-    conf = problem.spec.confidence
+    conf = problem.spec.confidence if confidence is None else confidence
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
