@@ -59,12 +59,17 @@ def explained(
             "hide the effect."
         )
     if ties:
-        names = ", ".join(
-            f"{t.fit.candidate.effect} ({'equal predictions' if t.test == 'equal_predictions' else f'Vuong p = {t.p_value:.2g}'})"  # noqa: E501
-            for t in ties
-        )
+        names = ", ".join(_tie(t, ties) for t in ties)
         out += f" Equally good explanations that this data cannot tell apart: {names}."
     return out
+
+
+def _tie(t: Tie, ties: Sequence[Tie]) -> str:
+    """Return a tie's effect and test, with its parameter when another tie has the same effect."""
+    c = t.fit.candidate
+    test = "equal predictions" if t.test == "equal_predictions" else f"Vuong p = {t.p_value:.2g}"
+    same = sum(u.fit.candidate.effect == c.effect for u in ties)
+    return f"{c.effect} ({c.parameters[0].name}; {test})" if same > 1 else f"{c.effect} ({test})"
 
 
 def settle(tests: Sequence[Discrimination]) -> str:

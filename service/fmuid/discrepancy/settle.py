@@ -42,13 +42,16 @@ CANDIDATES = 2
 ties) stays a fraction of the diagnosis."""
 
 
-def hypothesis(fit: CandidateFit) -> Hypothesis:
-    """Return a fitted candidate as a hypothesis: its parameters, fitted values and wrappers."""
+def hypothesis(fit: CandidateFit, name: str | None = None) -> Hypothesis:
+    """Return a fitted candidate as a hypothesis: its parameters, fitted values and wrappers.
+
+    ``name`` defaults to the candidate's effect.
+    """
     problem = fit.problem
     predictor = problem.predictor
     wrappers = predictor.wrappers if isinstance(predictor, AugmentedPredictor) else {}
     return Hypothesis(
-        name=fit.candidate.effect,
+        name=name or fit.candidate.effect,
         parameters=dict(problem.parameter_specs),
         values=problem.from_z(fit.z),
         wrappers=dict(wrappers),
@@ -76,12 +79,21 @@ def settling_tests(
 
     """
     space = default_space(problem).model_copy(update={"candidates": CANDIDATES})
-    a = hypothesis(named)
+    fits = [named, *(t.fit for t in ties[:MAX_TIES])]
+    a, *others = (hypothesis(f, name) for f, name in zip(fits, hypothesis_names(fits), strict=True))
     floor = float(stats.chi2.isf(SETTLES, 1)) / CONFIRM_BELOW
-    others = [hypothesis(t.fit) for t in ties[:MAX_TIES]]
     return discriminating_experiments(
         problem.fmu_path, problem.spec, space, a, others, confirm_from=floor
     )
+
+
+def hypothesis_names(fits: Sequence[CandidateFit]) -> list[str]:
+    """Effect names, with the added parameter where two fits share an effect (a bias per output)."""
+    effects = [f.candidate.effect for f in fits]
+    return [
+        f"{e} ({f.candidate.parameters[0].name})" if effects.count(e) > 1 else e
+        for e, f in zip(effects, fits, strict=True)
+    ]
 
 
 def settles(found: Discrimination) -> bool:
