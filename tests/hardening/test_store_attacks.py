@@ -7,6 +7,9 @@ while the queue fills and while the damaged store is used (the bound of
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
 import subprocess
 import threading
 import time
@@ -143,6 +146,7 @@ class Filler:
     def __init__(self, disk: Path):
         self.path = disk / "filler"
         self.stop = threading.Event()
+        self.full = threading.Event()  # set once the disk has been filled the first time
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.thread.start()
 
@@ -155,6 +159,7 @@ class Filler:
                             stream.write(b"\0" * size)
                     except OSError:
                         continue
+                self.full.set()
                 time.sleep(0.02)
 
     def remove(self) -> None:
@@ -179,14 +184,26 @@ def job_processes(data_dir: Path, service_pid: int) -> list[str]:
     return found
 
 
+def signal_all(pids: list[str], sig: signal.Signals) -> None:
+    for pid in pids:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(int(pid), sig)
+
+
 def test_a_full_disk_fails_the_running_job_with_the_reason(service_factory, step_csv, small_disk):
     data_dir = small_disk / "data"
     service = service_factory(data_dir, FMUID_MIN_FREE_BYTES=str(1 << 20))
     client = service.client()
     job = client.submit("profile", msd_spec(), [step_csv], model="msd")
-    assert wait_until(lambda: client.status(job)["progress"]["done"] >= 1, 300)
+    # the job is held while the disk fills: a small job could otherwise end before it is full
+    assert wait_until(lambda: job_processes(data_dir, service.process.pid), 300)
+    held = job_processes(data_dir, service.process.pid)
+    signal_all(held, signal.SIGSTOP)
     filler = Filler(small_disk)
     try:
+        assert filler.full.wait(60)
+        assert client.status(job)["status"] == "running", client.status(job)
+        signal_all(held, signal.SIGCONT)
         assert wait_until(lambda: not job_processes(data_dir, service.process.pid), 600)
         state = health(service)
         assert state["status"] == "degraded", state

@@ -18,6 +18,20 @@ CHECK_INTERVAL_S = 5.0
 BUSY_TIMEOUT_S = 0.05
 
 
+def free_space_problem(data_dir: Path, min_free_bytes: int) -> str | None:
+    """Return why the disk of ``data_dir`` has too little room for the store (None: it has room)."""
+    try:
+        free = shutil.disk_usage(data_dir).free
+    except OSError as exc:
+        return f"cannot read the free space of {data_dir}: {exc}"
+    if free < min_free_bytes:
+        return (
+            f"only {free} bytes free on the disk of {data_dir}, less than"
+            f" {min_free_bytes} (FMUID_MIN_FREE_BYTES)"
+        )
+    return None
+
+
 class StoreHealth:
     """Checks of one job store and its data folder.
 
@@ -57,15 +71,9 @@ class StoreHealth:
     def room_problems(self) -> list[str]:
         """Return why a new job would not fit on the disk (free space now, quota as last seen)."""
         found = []
-        try:
-            free = shutil.disk_usage(self.data_dir).free
-        except OSError as exc:
-            return [f"cannot read the free space of {self.data_dir}: {exc}"]
-        if free < self.min_free_bytes:
-            found.append(
-                f"only {free} bytes free on the disk of {self.data_dir}, less than"
-                f" {self.min_free_bytes} (FMUID_MIN_FREE_BYTES)"
-            )
+        short = free_space_problem(self.data_dir, self.min_free_bytes)
+        if short:
+            found.append(short)
         if self.disk_quota_bytes and self._usage > self.disk_quota_bytes:
             found.append(
                 f"the data folder takes {self._usage} bytes, more than its quota of"

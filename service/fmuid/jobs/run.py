@@ -36,6 +36,7 @@ from typing import Any
 
 from fmuid.errors import FmuidError
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
+from fmuid.jobs.health import free_space_problem
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -164,8 +165,14 @@ def run_engine(
     return fmuid.diagnose(fmu, experiments, spec, progress=progress)
 
 
-def run_job(store: JobStore, job: Job, memory_mb: int, dask: str | None) -> int:
-    """Run ``job`` and record its outcome; return the process exit status (0 when done)."""
+def run_job(
+    store: JobStore, job: Job, memory_mb: int, dask: str | None, min_free_bytes: int = 0
+) -> int:
+    """Run ``job`` and record its outcome; return the process exit status (0 when done).
+
+    The result is stored only while the disk of the data folder keeps ``min_free_bytes`` free
+    (the level below which the API takes no new job); under it the job fails, saying so.
+    """
     from fmuid.data import load_experiment, spec_from_json
 
     progress = ProgressWriter(store, job.id)
@@ -209,6 +216,10 @@ def run_job(store: JobStore, job: Job, memory_mb: int, dask: str | None) -> int:
         except Exception as exc:
             traceback.print_exc()
             store.fail(job.id, f"internal error: {type(exc).__name__}: {exc}")
+            return 1
+        short = free_space_problem(store.layout.root, min_free_bytes)
+        if short:
+            store.fail(job.id, f"the job store has no room for the result: {short}")
             return 1
         try:
             stored = store.finish(job.id, result_json)
@@ -260,6 +271,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--memory-mb", type=int, required=True)
     parser.add_argument("--timeout-s", type=float, required=True)
     parser.add_argument("--dask-scheduler", default=None)
+    parser.add_argument("--min-free-bytes", type=int, default=0)
     args = parser.parse_args(argv)
     limit_process(args.memory_mb)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
@@ -271,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     enforce_time_limit(store, job.id, args.timeout_s)
     try:
-        return run_job(store, job, args.memory_mb, args.dask_scheduler)
+        return run_job(store, job, args.memory_mb, args.dask_scheduler, args.min_free_bytes)
     except StoreError:
         logger.exception("job %s could not record its outcome", job.id)
         return STORE_FAILED_EXIT

@@ -209,6 +209,8 @@ class Supervisor:
             str(self.settings.job_memory_mb),
             "--timeout-s",
             str(self.settings.job_timeout_s),
+            "--min-free-bytes",
+            str(self.settings.min_free_bytes),
         ]
         if self.settings.dask_scheduler:
             args += ["--dask-scheduler", self.settings.dask_scheduler]
