@@ -49,7 +49,7 @@ def msd_file() -> Path:
 
 @pytest.fixture(scope="session")
 def broken_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """FMUs built from ``fmus_src/``: the msd interface with misbehaving physics."""
+    """FMUs built from ``fmus_src/``: the msd interface with misbehaving (or slow) physics."""
     out = tmp_path_factory.mktemp("broken_fmus")
     return {
         d.name: build_fmu(model_src_dir(), d, out)

@@ -45,10 +45,11 @@ def wait_running(client, job, min_done=1, timeout=120.0):
 
 
 def test_profile_uploaded_fmu_and_builtin_model_equal_direct_call(
-    service, msd_file, step_csv, direct_profile
+    service, broken_fmus, step_csv, direct_profile
 ):
     client = service.client()
-    uploaded = client.submit("profile", msd_spec(), [step_csv], fmu_path=msd_file)
+    # the uploaded FMU has the msd physics and is slow enough to be seen running
+    uploaded = client.submit("profile", msd_spec(), [step_csv], fmu_path=broken_fmus["slow_step"])
     builtin = client.submit("profile", msd_spec(), [step_csv], model="msd")
     running = wait_running(client, uploaded)
     assert 0 < running["progress"]["done"] <= running["progress"]["total"]
@@ -61,10 +62,13 @@ def test_profile_uploaded_fmu_and_builtin_model_equal_direct_call(
     assert [j["id"] for j in client.list()[:2]] == [builtin, uploaded]
 
 
-def test_sigkill_while_running_then_restart_finishes_every_job(service_factory, step_csv, tmp_path):
+def test_sigkill_while_running_then_restart_finishes_every_job(
+    service_factory, step_csv, broken_fmus, tmp_path
+):
     service = service_factory(tmp_path / "data")
     client = service.client()
-    running = client.submit("profile", msd_spec(), [step_csv], model="msd")
+    slow = broken_fmus["slow_step"]  # msd physics; the job cannot end before it is seen running
+    running = client.submit("profile", msd_spec(), [step_csv], fmu_path=slow)
     queued = client.submit("fit", msd_spec(), [step_csv], model="msd")
     wait_running(client, running)
     service.kill()

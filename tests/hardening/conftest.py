@@ -100,7 +100,8 @@ def step_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="session")
 def test_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """FMUs with the msd interface and misbehaving physics, from ``fmus_src/`` here and in api."""
+    """FMUs with the msd interface and misbehaving (or slow) physics, from ``fmus_src/`` here and
+    in api."""
     out = tmp_path_factory.mktemp("test_fmus")
     sources = [HERE / "fmus_src", HERE.parent / "api" / "fmus_src"]
     return {

@@ -56,7 +56,7 @@ def dask_cluster(tmp_path):
 
 
 def test_a_profile_job_survives_a_killed_dask_worker(
-    service_factory, step_csv, dask_cluster, tmp_path
+    service_factory, step_csv, test_fmus, dask_cluster, tmp_path
 ):
     address = dask_cluster
     from distributed import Client
@@ -66,7 +66,8 @@ def test_a_profile_job_survives_a_killed_dask_worker(
         service = service_factory(tmp_path / "data", FMUID_DASK_SCHEDULER=address)
         client = service.client()
         assert client.health()["dask_scheduler"] == address
-        job = client.submit("profile", msd_spec(), [step_csv], model="msd")
+        # msd physics, slow enough that the job is still running after the worker is killed
+        job = client.submit("profile", msd_spec(), [step_csv], fmu_path=test_fmus["slow_step"])
 
         def busy_worker() -> str | None:
             busy = [w for w, tasks in dask_client.processing().items() if tasks]

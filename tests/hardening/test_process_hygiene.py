@@ -38,12 +38,15 @@ def tagged_processes(db: Path) -> list[int]:
     return found
 
 
-def test_sigkill_of_the_service_leaves_no_job_process(service_factory, step_csv, tmp_path):
+def test_sigkill_of_the_service_leaves_no_job_process(
+    service_factory, step_csv, test_fmus, tmp_path
+):
     data_dir = tmp_path / "data"
     db = data_dir / "jobs.sqlite"
     service = service_factory(data_dir, FMUID_WORKERS="2")
     client = service.client()
-    jobs = [client.submit("profile", msd_spec(), [step_csv], model="msd") for _ in range(2)]
+    slow = test_fmus["slow_step"]  # msd physics; its jobs cannot end between two looks
+    jobs = [client.submit("profile", msd_spec(), [step_csv], fmu_path=slow) for _ in range(2)]
 
     def profiling_on_a_pool() -> bool:
         states = [client.status(job) for job in jobs]

@@ -29,11 +29,12 @@ def wait_for(predicate, timeout=120.0):
     raise TimeoutError(predicate)
 
 
-def test_sigkill_with_jobs_queued_and_running(service_factory, step_csv, tmp_path):
+def test_sigkill_with_jobs_queued_and_running(service_factory, step_csv, test_fmus, tmp_path):
     data_dir = tmp_path / "data"
     service = service_factory(data_dir, FMUID_WORKERS="2")
     client = service.client()
-    jobs = {client.submit(kind, msd_spec(), [step_csv], model="msd"): kind for kind in KINDS}
+    slow = test_fmus["slow_step"]  # msd physics; its jobs cannot end between two looks
+    jobs = {client.submit(kind, msd_spec(), [step_csv], fmu_path=slow): kind for kind in KINDS}
 
     def two_running_several_queued() -> bool:
         states = [client.status(job)["status"] for job in jobs]
