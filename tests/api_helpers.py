@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import shutil
 import signal
 import socket
 import sqlite3
@@ -186,3 +187,14 @@ def wipe_after_schema(db: Path) -> None:
     with open(db, "r+b") as stream:
         stream.seek(4096)
         stream.write(b"\xa5" * (size - 4096))
+
+
+def stored_file(store, source: Path | None = None, text: str | None = None) -> str:
+    """Put a file (copied from ``source``, or holding ``text``) into a job store; its sha256."""
+    path = store.tmp_dir() / "upload"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if source is not None:
+        shutil.copyfile(source, path)
+    else:
+        path.write_text(text or "")
+    return store.add_file(path)

@@ -1,10 +1,10 @@
 """A design job killed mid-study and queued again by a restarted service resumes its work."""
 
 import json
-import shutil
 
 import pytest
 
+from api_helpers import stored_file
 from design_cases import MSD_SPACE, MSD_SPEC, SMALL, Stop, comparable, counting
 from fmuid.jobs import housekeeping as hk
 from fmuid.jobs import restarts, run
@@ -13,24 +13,14 @@ from fmuid.jobs.store import Dataset, JobStore
 from fmuid.model.builtin import builtin_fmu
 
 
-def upload(store, source=None, text=None):
-    path = store.tmp_dir() / "upload"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if source is not None:
-        shutil.copyfile(source, path)
-    else:
-        path.write_text(text)
-    return store.add_file(path)
-
-
 @pytest.mark.slow
 def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
     tmp_path, serial, monkeypatch
 ):
     store = JobStore(tmp_path / "jobs.sqlite", tmp_path)
-    space = upload(store, text=json.dumps({**MSD_SPACE, **SMALL}))
+    space = stored_file(store, text=json.dumps({**MSD_SPACE, **SMALL}))
     job = store.create(
-        "design", json.dumps(MSD_SPEC), upload(store, builtin_fmu("msd")), "msd",
+        "design", json.dumps(MSD_SPEC), stored_file(store, builtin_fmu("msd")), "msd",
         [Dataset("E.json", space)],
     )  # fmt: skip
     calls = counting(monkeypatch)
@@ -62,7 +52,7 @@ def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
 
 def test_a_finished_or_removed_job_leaves_no_checkpoint(tmp_path):
     store = JobStore(tmp_path / "jobs.sqlite", tmp_path)
-    fmu = upload(store, text="fmu")
+    fmu = stored_file(store, text="fmu")
     queued = store.create("design", "{}", fmu, "m", [])
     failed = store.create("design", "{}", fmu, "m", [])
     store.fail(failed.id, "exceeded the time limit of 1 s")

@@ -8,24 +8,16 @@ which pages the store happens to have.
 import json
 import shutil
 
-from api_helpers import msd_spec
+from api_helpers import msd_spec, stored_file
 from fmuid.jobs import run
 from fmuid.jobs.store import Dataset, JobStore
 from fmuid.model.builtin import builtin_fmu
 
 
 def queued_fit(store: JobStore, step_csv) -> str:
-    def upload(source):
-        path = store.tmp_dir() / "upload"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(source, path)
-        return store.add_file(path)
-
-    spec = msd_spec()
-    job = store.create("fit", spec, upload(builtin_fmu("msd")), "msd", [
-        Dataset("step.csv", upload(step_csv)),
-    ])  # fmt: skip
-    return job.id
+    fmu = stored_file(store, builtin_fmu("msd"))
+    datasets = [Dataset("step.csv", stored_file(store, step_csv))]
+    return store.create("fit", msd_spec(), fmu, "msd", datasets).id
 
 
 def test_a_job_under_the_reserve_fails_naming_it_and_stores_no_result(tmp_path, step_csv):

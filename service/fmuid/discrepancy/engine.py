@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -51,6 +52,7 @@ from fmuid.estimation.optimize import (
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.profiling.engine import profile_problem
+from fmuid.profiling.result import ProfileResult
 from fmuid.profiling.walk import WalkOptions
 from fmuid.progress import Progress, ProgressCallback
 
@@ -115,20 +117,16 @@ def _score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
     )  # fmt: skip
 
 
-def _added_estimate(
-    value: float, p: AddedParameter, ci: tuple[float | None, float | None], confidence: float
-) -> AddedEstimate:
-    """Estimate, interval and the off-value check of one added parameter."""
-    lo, hi = ci
-    if p.off_side == "low":
-        excludes = lo is not None
-    elif p.off_side == "high":
-        excludes = hi is not None
-    else:
-        low = lo if lo is not None else p.spec.lower
-        high = hi if hi is not None else p.spec.upper
-        excludes = not low <= p.off <= high
-    return AddedEstimate(value, ci, confidence, p.unit, p.off, bool(excludes))
+def _added_estimates(
+    prof: ProfileResult, added: Sequence[AddedParameter], confidence: float
+) -> dict[str, AddedEstimate]:
+    """Estimates, intervals and off-value checks of the added parameters from their profiles."""
+    return {
+        p.name: AddedEstimate.of(
+            prof.fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise, confidence
+        )
+        for p in added
+    }
 
 
 class _Run:
@@ -189,13 +187,8 @@ def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
         confidence=run.opts.ci_confidence,
     )
     run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
-    return {
-        p.name: _added_estimate(
-            prof.fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise,
-            run.opts.ci_confidence,
-        ).to_dict()
-        for p in tie.candidate.parameters
-    }  # fmt: skip
+    estimates = _added_estimates(prof, tie.candidate.parameters, run.opts.ci_confidence)
+    return {name: e.to_dict() for name, e in estimates.items()}
 
 
 def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestResult]:
@@ -359,13 +352,7 @@ def diagnose_problem(
     )  # fmt: skip
     run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
-    estimates = {
-        p.name: _added_estimate(
-            final_fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise,
-            opts.ci_confidence,
-        )
-        for p in added
-    }  # fmt: skip
+    estimates = _added_estimates(prof, added, opts.ci_confidence)
     run.report("profiles of the added parameters")
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.residual_tests import TestResult, Window
 from fmuid.estimation.result import Cost
 
@@ -88,6 +89,26 @@ class AddedEstimate:
     unit: str
     off: float
     excludes_off: bool
+
+    @classmethod
+    def of(
+        cls,
+        value: float,
+        p: AddedParameter,
+        ci: tuple[float | None, float | None],
+        confidence: float,
+    ) -> AddedEstimate:
+        """Estimate, interval and the off-value check of the added parameter ``p``."""
+        lo, hi = ci
+        if p.off_side == "low":
+            excludes = lo is not None
+        elif p.off_side == "high":
+            excludes = hi is not None
+        else:
+            low = lo if lo is not None else p.spec.lower
+            high = hi if hi is not None else p.spec.upper
+            excludes = not low <= p.off <= high
+        return cls(value, ci, confidence, p.unit, p.off, bool(excludes))
 
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form."""
