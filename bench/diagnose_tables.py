@@ -10,7 +10,7 @@ from scipy import stats
 
 import fieldtruth as ft
 
-CATALOGUE = [e for e in ft.EFFECTS if e != "hitch_stiffness"]
+CATALOGUE = [e for e in ft.EFFECTS if e not in ft.UNCATALOGUED]
 
 
 def clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
@@ -79,7 +79,9 @@ def confusion(rows: list[dict[str, Any]]) -> None:
 
 def right_answer(effect: str) -> str:
     """What a correct diagnosis names for a true effect."""
-    return {"hitch_stiffness": "unexplained", "control": "none"}.get(effect, effect)
+    if effect in ft.UNCATALOGUED:
+        return "unexplained"
+    return "none" if effect == "control" else effect
 
 
 def summary(rows: list[dict[str, Any]]) -> None:

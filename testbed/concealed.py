@@ -11,8 +11,8 @@ by a safeguarded secant search (bisection when the secant leaves the bracket) in
 
 weighted with the case's sigma. Then noise is added and the operational criteria of
 :mod:`operational` are checked on the noisy data (Ljung-Box on every channel, reduced chi2 in
-the noise band, likelihood-ratio p of the true augmentation in [1e-12, 1e-3]; for the
-uncatalogued ``hitch_stiffness`` only the first two). When they fail, the noise is drawn again
+the noise band, likelihood-ratio p of the true augmentation in [1e-12, 1e-3]; for the effects
+of ``fieldtruth.UNCATALOGUED`` only the first two). When they fail, the noise is drawn again
 (up to :data:`ATTEMPTS` times); a case that stays visible is kept with ``concealed = False``.
 
 Controls use the same draw without an effect and without any fit. Cases are cached on disk as
@@ -48,12 +48,14 @@ CODE: dict[str | None, int] = {None: 0, **{e: i + 1 for i, e in enumerate(ft.EFF
 FIRST_STRENGTH = {
     "sensor_lag": 0.05, "input_delay": 0.05, "steering_lag": 0.05, "steer_offset": 0.001,
     "gyro_bias": 0.001, "tire_saturation": 10.0, "side_slope": 0.03, "hitch_stiffness": 5000.0,
+    "aligning_torque": 0.05,
 }  # fmt: skip
 """Where the search starts (strength units: see :func:`magnitude_of`)."""
 STRENGTH_RANGE = {
     "sensor_lag": (1e-4, 1.0), "input_delay": (1e-4, 1.0), "steering_lag": (1e-4, 1.0),
     "steer_offset": (1e-6, 0.1), "gyro_bias": (1e-6, 0.1), "tire_saturation": (0.5, 500.0),
     "side_slope": (1e-5, 0.5), "hitch_stiffness": (1.0, 1e6),
+    "aligning_torque": (1e-4, 2.0),
 }  # fmt: skip
 SIGNED = ("steer_offset", "gyro_bias", "side_slope")
 

@@ -17,6 +17,8 @@ tire_saturation  every lateral tire force is -C alpha_sat tanh(alpha / alpha_sat
 side_slope     m g sin(slope) cos(psi) pulls each body sideways at its CG
 hitch_stiffness  (not in the catalogue) a torsional spring-damper in the hitch resists the
                articulation angle psi_t - psi_i
+aligning_torque  (not in the catalogue) each tire's self-aligning moment: its lateral force
+               acts a pneumatic trail behind the axle (magnitude: the trail [m])
 ============== =========================================================================
 
 The recorded steer angle is logged at ``input_rate`` and the vehicle sees it interpolated
@@ -53,8 +55,11 @@ BOUNDS = {
 
 EFFECTS = (
     "sensor_lag", "input_delay", "steering_lag", "steer_offset", "gyro_bias",
-    "tire_saturation", "side_slope", "hitch_stiffness",
+    "tire_saturation", "side_slope", "hitch_stiffness", "aligning_torque",
 )  # fmt: skip
+
+UNCATALOGUED = ("hitch_stiffness", "aligning_torque")
+"""Effects that no catalogue candidate models: a right diagnosis says ``unexplained``."""
 
 MAGNITUDES = {
     "sensor_lag": (0.1, 0.2),  # tau [s]
@@ -65,6 +70,7 @@ MAGNITUDES = {
     "tire_saturation": (0.07, 0.045),  # alpha_sat [rad]; smaller saturates more
     "side_slope": (0.06, 0.12),  # [rad]
     "hitch_stiffness": (10000.0, 20000.0),  # [N m/rad]; damping 0.3 s times it
+    "aligning_torque": (0.1, 0.2),  # pneumatic trail [m]
 }
 """Two magnitudes per effect: "small" (concealed) and "large"."""
 
@@ -166,6 +172,7 @@ def simulate_truth(
     sat = magnitude if effect == "tire_saturation" else 0.0
     slope = magnitude if effect == "side_slope" else 0.0
     k_hitch = magnitude if effect == "hitch_stiffness" else 0.0
+    trail = magnitude if effect == "aligning_torque" else 0.0
     delay = magnitude if effect == "input_delay" else 0.0
     offset = magnitude if effect == "steer_offset" else 0.0
     tau_steer = magnitude if effect == "steering_lag" else 0.0
@@ -186,11 +193,12 @@ def simulate_truth(
         gt_force = mt * G * np.sin(slope) * np.cos(pt)
         gi_force = mi * G * np.sin(slope) * np.cos(pi)
         torque = k_hitch * ((pt - pi) + 0.3 * (gt - gi))  # on the implement
+        aligning = trail * (ff + fr)  # the forces act a trail behind the tractor's axles
         forces = np.array(
             [
                 -(mt + mi) * u * gt + ff + fr + fi + gt_force + gi_force,
-                mi * c * u * gt + a * ff - b * fr - c * fi - c * gi_force - torque,
-                mi * d * u * gt - (d + e) * fi - d * gi_force + torque,
+                mi * c * u * gt + a * ff - b * fr - aligning - c * fi - c * gi_force - torque,
+                mi * d * u * gt - (d + e + trail) * fi - d * gi_force + torque,
             ]
         )
         acc = mass_inv @ forces

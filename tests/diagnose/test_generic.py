@@ -15,8 +15,8 @@ from scipy import integrate, stats
 
 from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.discrepancy import generic
-from fmuid.discrepancy.scan import sensitivity_basis
 from fmuid.estimation.optimize import fit_problem, safe_residuals
+from fmuid.estimation.problem import Problem
 from fmuid.stages import make_problem
 
 TRUE = {"m": 1.1, "k": 4.4, "b": 1.6}
@@ -55,12 +55,13 @@ def _data(seed: int, absorber: float) -> object:
     return experiment_from_arrays("chirp.csv", TIMES, columns)
 
 
-def _generic_p(msd_fmu: Path, seed: int, absorber: float) -> float:
+def _problem(msd_fmu: Path, data: object, lower: float, upper: float) -> Problem:
+    """The msd study of ``data``: m, k, b free within ``[lower, upper]``, started at the truth."""
     spec = spec_from_json(
         json.dumps(
             {
                 "parameters": {
-                    n: {"start": v, "lower": 0.05, "upper": 20.0} for n, v in TRUE.items()
+                    n: {"start": v, "lower": lower, "upper": upper} for n, v in TRUE.items()
                 },
                 "inputs": ["f"],
                 "outputs": {"x": {"sigma": SIGMA}, "v": {"sigma": SIGMA}},
@@ -68,11 +69,15 @@ def _generic_p(msd_fmu: Path, seed: int, absorber: float) -> float:
             }
         )
     )
-    problem = make_problem(msd_fmu, [_data(seed, absorber)], spec)  # type: ignore[list-item]
+    return make_problem(msd_fmu, [data], spec)  # type: ignore[list-item]
+
+
+def _generic_p(msd_fmu: Path, seed: int, absorber: float) -> float:
+    problem = _problem(msd_fmu, _data(seed, absorber), 0.05, 20.0)
     fit = fit_problem(problem, global_search=False, seed=0)
-    test, _ = generic.generic_test(
-        problem, safe_residuals(problem, fit.z_estimate()), sensitivity_basis(fit.jacobian), seed
-    )
+    z = fit.z_estimate()
+    model = generic.local_model(problem, z, fit.jacobian)
+    test, _ = generic.generic_test(problem, safe_residuals(problem, z), model, seed)
     assert test is not None and test.test == generic.NAME
     return test.p_value
 
@@ -86,3 +91,26 @@ def test_the_test_holds_its_level_on_the_right_model(msd_fmu: Path) -> None:
 
 def test_an_unmodelled_absorber_mass_is_found(msd_fmu: Path) -> None:
     assert _generic_p(msd_fmu, 1, 0.15) < 1e-6
+
+
+def test_misfit_that_wants_a_pinned_parameter_beyond_its_bound_counts() -> None:
+    # e1: the sensitivity of a parameter at its bound, signed inward; phi: (e1 + e2) / sqrt 2.
+    e = np.eye(6)
+    pinned, phi = e[:, :1], ((e[:, 0] + e[:, 1]) / np.sqrt(2))[:, None]
+    outward = -3.0 * e[:, 0] + 2.0 * e[:, 2]
+    # null: d = 0, chi2 13; with phi: min (3 + x)^2 + x^2 + 4 at x = -1.5 is 8.5
+    assert generic.constrained_drop(outward, phi, pinned) == pytest.approx(4.5, abs=1e-9)
+    # inward, a move of the parameter takes the e1 part in both fits
+    inward = 3.0 * e[:, 0] + 2.0 * e[:, 2]
+    assert generic.constrained_drop(inward, phi, pinned) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_the_local_model_pins_parameters_at_a_bound_signed_inward(msd_fmu: Path) -> None:
+    problem = _problem(msd_fmu, _data(0, 0.0), 0.5, 5.0)
+    z = problem.to_z({"m": 0.5, "k": 5.0, "b": 1.6})
+    jac = np.random.default_rng(0).normal(size=(10, 3))
+    basis, pinned = generic.local_model(problem, z, jac)
+    k = {n: i for i, n in enumerate(problem.names)}
+    np.testing.assert_allclose(pinned, np.column_stack([jac[:, k["m"]], -jac[:, k["k"]]]))
+    assert basis.shape == (10, 1)
+    np.testing.assert_allclose(abs(basis[:, 0] @ jac[:, k["b"]]), np.linalg.norm(jac[:, k["b"]]))

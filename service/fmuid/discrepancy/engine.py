@@ -36,10 +36,10 @@ from fmuid.discrepancy import residual_tests as rt
 from fmuid.discrepancy.absorb import absorbed
 from fmuid.discrepancy.catalogue import Candidate, study_catalogue
 from fmuid.discrepancy.correction import arx_correction
-from fmuid.discrepancy.generic import generic_test
+from fmuid.discrepancy.generic import generic_test, local_model
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis
-from fmuid.discrepancy.scan import CandidateFit, Scanner, augmented, scan, sensitivity_basis
+from fmuid.discrepancy.scan import CandidateFit, Scanner, augmented, scan
 from fmuid.discrepancy.settle import settles, settling_tests
 from fmuid.estimation.optimize import (
     FitOptions,
@@ -195,7 +195,8 @@ def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestRes
     """Residual tests of an augmented fit and the generic error-model test on top of it."""
     tests = locate.residual_tests(problem, fit)
     residuals = safe_residuals(problem, fit.z_estimate())
-    generic, _ = generic_test(problem, residuals, sensitivity_basis(fit.jacobian), seed)
+    model = local_model(problem, fit.z_estimate(), fit.jacobian)
+    generic, _ = generic_test(problem, residuals, model, seed)
     return [*tests, generic] if generic else tests
 
 
@@ -262,7 +263,8 @@ def diagnose_problem(
     fit, scanner, fits, adjusted = _scan_base(run, fit, cands)
     tests_before = locate.residual_tests(problem, fit)
     agreement = locate.experiments_disagree(problem, fit, opts.agreement_nfev)
-    generic, pole = generic_test(problem, scanner.r0, scanner.basis, problem.spec.seed)
+    model = local_model(problem, scanner.z, scanner.jac)
+    generic, pole = generic_test(problem, scanner.r0, model, problem.spec.seed)
     run.report("residual tests, the experiments' agreement and the generic error model")
     k_best = int(np.argmin(adjusted))
     scan_test = rt.TestResult(

@@ -19,6 +19,14 @@ The pole is not known in advance, so a bank of poles one octave apart spans the 
 can see: from one cycle over the longest experiment to a quarter of the sampling rate. The
 test's p-value is that of the smallest p-value over the bank, calibrated for the poles'
 correlation by min-P (:func:`.decide.min_p`), as the catalogue scan is.
+
+**Parameters pressed against a bound.** A fitted parameter at a bound of its range can move
+only inward, and the residuals are not orthogonal to its sensitivity: the part of the misfit
+that wants it beyond the bound is misfit that no admissible move reproduces. Its sensitivity is
+therefore not projected out; it enters both fits of the statistic as a column whose
+coefficient moves the parameter inward only (:func:`local_model`), so that the statistic is
+the local likelihood ratio under the constraint, ``min ||r - C d||^2 - min ||r - C d - Phi b||^2``
+over ``d >= 0`` (``C``: the pinned sensitivities of the weighted predictions, signed inward).
 """
 
 from __future__ import annotations
@@ -26,12 +34,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal, stats
+from scipy import optimize, signal, stats
 
 from fmuid.discrepancy.decide import min_p
 from fmuid.discrepancy.residual_tests import TestResult
+from fmuid.discrepancy.scan import sensitivity_basis
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
+from fmuid.estimation.space import BOUND_TOLERANCE
 
 ORDER = 2
 """Laguerre filters per input and output (the error model's order)."""
@@ -105,12 +115,53 @@ def regressors(problem: Problem, pole_hz: float) -> np.ndarray:
     return np.vstack(rows)
 
 
-def blocks(problem: Problem, residuals: np.ndarray, basis: np.ndarray) -> list[Block]:
+def local_model(
+    problem: Problem, z: np.ndarray, jacobian: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return what moves of a fit's parameters can reproduce, near the fit.
+
+    Returns
+    -------
+    basis, pinned
+        An orthonormal basis of the sensitivities of the weighted predictions (``jacobian``,
+        as :func:`fmuid.estimation.optimize.jacobian` returns them) to the parameters inside
+        their range, and those to the parameters at a bound, each signed so that a positive
+        coefficient moves its parameter inward (``n_data x n_pinned``).
+    """
+    z = np.asarray(z, dtype=float)
+    jac = np.asarray(jacobian, dtype=float)
+    lo, hi = problem.z_lower, problem.z_upper
+    tol = BOUND_TOLERANCE * (hi - lo)
+    inward = np.where(z <= lo + tol, 1.0, np.where(z >= hi - tol, -1.0, 0.0))
+    free = inward == 0.0
+    return sensitivity_basis(jac[:, free]), jac[:, ~free] * inward[~free]
+
+
+def constrained_drop(r: np.ndarray, phi: np.ndarray, pinned: np.ndarray) -> float:
+    """Drop of ``||r - C d||^2`` (``d >= 0``) when ``Phi b`` (free) is added."""
+    n = pinned.shape[1]
+
+    def best(a: np.ndarray, lower: np.ndarray) -> float:
+        sol = optimize.lsq_linear(a, r, bounds=(lower, np.inf), method="bvls")
+        return float(sol.fun @ sol.fun)
+
+    null = best(pinned, np.zeros(n))
+    both = np.hstack([pinned, phi])
+    return max(null - best(both, np.r_[np.zeros(n), np.full(phi.shape[1], -np.inf)]), 0.0)
+
+
+def blocks(
+    problem: Problem, residuals: np.ndarray, basis: np.ndarray, pinned: np.ndarray | None = None
+) -> list[Block]:
     """Score statistic of the error model at every pole of the bank.
 
-    ``basis`` spans the fit's weighted sensitivities (:func:`.scan.sensitivity_basis`).
+    ``basis`` spans the sensitivities of the fit's parameters inside their range and
+    ``pinned`` holds those at a bound, signed inward (:func:`local_model`).
     """
     r = np.asarray(residuals, dtype=float)
+    pinned_q = None
+    if pinned is not None and pinned.shape[1]:
+        pinned_q = pinned - basis @ (basis.T @ pinned)
     out = []
     for pole in poles_hz(problem):
         phi = regressors(problem, float(pole))
@@ -119,22 +170,29 @@ def blocks(problem: Problem, residuals: np.ndarray, basis: np.ndarray) -> list[B
         q = q[:, sv > 1e-8 * max(float(sv.max(initial=0.0)), 1e-300)]
         if q.shape[1] == 0:
             continue
-        score = q.T @ r
-        statistic = float(score @ score)
+        if pinned_q is None:
+            score = q.T @ r
+            statistic = float(score @ score)
+        else:
+            statistic = constrained_drop(r, q, pinned_q)
         out.append(Block(float(pole), q, statistic, float(stats.chi2.sf(statistic, q.shape[1]))))
     return out
 
 
 def generic_test(
-    problem: Problem, residuals: np.ndarray, basis: np.ndarray, seed: int
+    problem: Problem,
+    residuals: np.ndarray,
+    model: tuple[np.ndarray, np.ndarray],
+    seed: int,
 ) -> tuple[TestResult | None, Block | None]:
     """Return the generic error-model test of a fit and the pole of its smallest p-value.
 
-    ``None`` when the problem has no inputs (nothing drives the error model).
+    ``model`` is the fit's :func:`local_model`. ``None`` when the problem has no inputs
+    (nothing drives the error model).
     """
     if not problem.inputs:
         return None, None
-    bank = blocks(problem, residuals, basis)
+    bank = blocks(problem, residuals, *model)
     if not bank:
         return None, None
     adjusted = min_p(bank, seed)
