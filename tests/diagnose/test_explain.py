@@ -47,3 +47,12 @@ def test_settling_hypotheses_have_distinct_names() -> None:
     ]
     names = hypothesis_names(fits)  # type: ignore[arg-type]
     assert names == ["gyro_bias (bias_gam_t)", "gyro_bias (bias_gam_i)", "side_slope"]
+
+
+def test_a_generic_error_model_that_fits_as_well_is_said() -> None:
+    named = _candidate("tire_saturation", "alpha_sat")
+    estimate = AddedEstimate(0.1, (0.05, 0.2), 0.95, "rad", 0.0, True)
+    rival = {"effect": "unexplained", "model": "Laguerre filters", "p_value": 0.65}
+    text = explain.explained([named], {"alpha_sat": estimate}, 40.0, 20.0, 1e-5, [], True, rival)
+    assert "outside the catalogue (Laguerre filters) explains the data as well" in text
+    assert "Vuong p = 0.65" in text

@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from scipy import integrate, stats
 
 from fmuid.data import experiment_from_arrays, spec_from_json
-from fmuid.discrepancy import generic
+from fmuid.discrepancy import decide, generic
 from fmuid.estimation.optimize import fit_problem, safe_residuals
 from fmuid.estimation.problem import Problem
 from fmuid.stages import make_problem
@@ -114,3 +115,21 @@ def test_the_local_model_pins_parameters_at_a_bound_signed_inward(msd_fmu: Path)
     np.testing.assert_allclose(pinned, np.column_stack([jac[:, k["m"]], -jac[:, k["k"]]]))
     assert basis.shape == (10, 1)
     np.testing.assert_allclose(abs(basis[:, 0] @ jac[:, k["b"]]), np.linalg.norm(jac[:, k["b"]]))
+
+
+def test_the_fit_with_the_error_model_keeps_a_pinned_parameter_inside() -> None:
+    e = np.eye(6)
+    pinned, phi = e[:, :1], ((e[:, 0] + e[:, 1]) / np.sqrt(2))[:, None]
+    block = generic.Block(0.1, phi, 0.0, 1.0)
+    fitted = generic.fitted_residuals(-3.0 * e[:, 0] + 2.0 * e[:, 2], block, (e[:, 5:5], pinned))
+    # the minimum of the closed form above: (3 + x)^2 + x^2 + 4 at x = -1.5
+    np.testing.assert_allclose(fitted, [-1.5, 1.5, 2.0, 0.0, 0.0, 0.0], atol=1e-9)
+
+
+def test_the_error_model_ties_a_candidate_only_when_it_fits_as_well() -> None:
+    noise = np.random.default_rng(0).standard_normal(1000)
+    best = SimpleNamespace(residuals=noise, problem=SimpleNamespace(n_free=7))
+    worse = noise + 0.3  # chi2 up by about 90
+    assert decide.generic_tie(best, worse, 10, "m") is None  # type: ignore[arg-type]
+    tie = decide.generic_tie(best, noise.copy(), 10, "m")  # type: ignore[arg-type]
+    assert tie is not None and tie["effect"] == "unexplained" and tie["p_value"] >= 0.05

@@ -22,7 +22,9 @@ caps it.
 **Ties.** Two significant candidates are indistinguishable when their fitted weighted
 predictions are equal (``equal_predictions``: no experiment of this design can tell them
 apart) or when Vuong's test between the non-nested fits (with Schwarz's correction for the
-number of parameters) does not prefer one at :data:`TIE_LEVEL`.
+number of parameters) does not prefer one at :data:`TIE_LEVEL`. The same test between the
+named candidate and the generic error model (:func:`generic_tie`) lists ``unexplained`` as a
+tie: structure outside the catalogue explains the data as well.
 """
 
 from __future__ import annotations
@@ -187,14 +189,41 @@ class Tie:
 
 def vuong(best: CandidateFit, other: CandidateFit) -> tuple[float, float]:
     """Vuong's z statistic of ``best`` against ``other`` and its two-sided p-value."""
-    n = len(best.residuals)
-    ratio = 0.5 * (other.residuals**2 - best.residuals**2)
+    return vuong_test(best.residuals, best.problem.n_free, other.residuals, other.problem.n_free)
+
+
+def vuong_test(
+    best: np.ndarray, best_free: int, other: np.ndarray, other_free: int
+) -> tuple[float, float]:
+    """Vuong's z of one fit against another, from their weighted residuals and free counts."""
+    n = len(best)
+    ratio = 0.5 * (other**2 - best**2)
     omega = float(np.std(ratio))
-    correction = 0.5 * (best.problem.n_free - other.problem.n_free) * np.log(n)
+    correction = 0.5 * (best_free - other_free) * np.log(n)
     if omega == 0.0:
         return 0.0, 1.0
     z = (float(ratio.sum()) - correction) / (np.sqrt(n) * omega)
     return float(z), float(2.0 * stats.norm.sf(abs(z)))
+
+
+def generic_tie(
+    best: CandidateFit, residuals: np.ndarray, n_free: int, model: str
+) -> dict[str, object] | None:
+    """Return the generic error model as a tie of ``best`` when Vuong's test prefers neither.
+
+    ``residuals`` and ``n_free`` are those of the base model with the generic error model
+    (:func:`.generic.fitted_residuals`): a named candidate that explains the data no better
+    than input-driven structure outside the catalogue may stand in for physics the catalogue
+    lacks.
+    """
+    z, p = vuong_test(best.residuals, best.problem.n_free, residuals, n_free)
+    if p < TIE_LEVEL:
+        return None
+    return {
+        "effect": "unexplained", "model": model, "parameters": {},
+        "chi2": float(residuals @ residuals), "test": "vuong", "statistic": z, "p_value": p,
+        "max_difference_sigma": float(np.max(np.abs(residuals - best.residuals))),
+    }  # fmt: skip
 
 
 def ties(best: CandidateFit, others: Sequence[CandidateFit]) -> list[Tie]:

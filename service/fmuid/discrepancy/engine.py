@@ -36,7 +36,7 @@ from fmuid.discrepancy import residual_tests as rt
 from fmuid.discrepancy.absorb import absorbed
 from fmuid.discrepancy.catalogue import Candidate, study_catalogue
 from fmuid.discrepancy.correction import arx_correction
-from fmuid.discrepancy.generic import generic_test, local_model
+from fmuid.discrepancy.generic import describe, generic_rival, generic_test, local_model
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis
 from fmuid.discrepancy.scan import CandidateFit, Scanner, augmented, scan
@@ -332,9 +332,8 @@ def diagnose_problem(
         correction = arx_correction(locate.residual_series(problem, fit.estimates))
         if generic is not None and pole is not None:
             correction["input_error_model"] = {
-                "model": f"Laguerre filters of each input (pole {pole.pole_hz:.3g} Hz) per output",
-                "pole_hz": pole.pole_hz, "chi2_drop": generic.statistic, "df": generic.df,
-                "p_value": generic.p_value,
+                "model": describe(pole), "pole_hz": pole.pole_hz,
+                "chi2_drop": generic.statistic, "df": generic.df, "p_value": generic.p_value,
             }  # fmt: skip
         run.report("generic correction")
         worst = min(tests_after, key=lambda t: t.p_value) if tests_after else None
@@ -372,6 +371,9 @@ def diagnose_problem(
     tests = settling_tests(problem, best, ties) if opts.discriminate else []
     for entry, test in zip(tied, tests):
         entry["expected_separation"] = round(test.expected_chi2, 4)
+    rival = None
+    if len(applied) == 1 and pole is not None:
+        rival = generic_rival(best, scanner.r0, pole, model, problem.n_free)
     proposal = max(filter(settles, tests), key=lambda d: d.expected_chi2, default=None)
     if tests:
         run.report("tests that would settle the ties")
@@ -380,12 +382,12 @@ def diagnose_problem(
     return Diagnosis(
         mismatch=True, tests_after=tuple(tests_after), effect=best.candidate.effect,
         description=explain.explained(
-            applied, estimates, fit.chi2, final_fit.chi2, lrt, ties, concealed
+            applied, estimates, fit.chi2, final_fit.chi2, lrt, ties, concealed, rival
         ) + explain.settle(tests),
         candidates=tuple(scores), added_parameters=estimates, chi2_after=final_fit.chi2,
         lrt_p_value=lrt, bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
         parameters_after=dict(final_fit.estimates), second_effect=second,
-        indistinguishable=tuple(tied), absorbed=absorbed_by,
+        indistinguishable=(*tied, *([rival] if rival else [])), absorbed=absorbed_by,
         discriminating_experiment=proposal.to_dict() if proposal else None,
         cost=run.cost(), **common,
     )  # fmt: skip

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from scipy import stats
@@ -40,8 +40,9 @@ def explained(
     lrt: float,
     ties: Sequence[Tie],
     concealed: bool,
+    rival: Mapping[str, Any] | None = None,
 ) -> str:
-    """Verdict and summary of a named effect."""
+    """Verdict and summary of a named effect (``rival``: the generic error model as a tie)."""
     parts = []
     for c in applied:
         e = estimates[c.parameters[0].name]
@@ -61,6 +62,12 @@ def explained(
     if ties:
         names = ", ".join(_tie(t, ties) for t in ties)
         out += f" Equally good explanations that this data cannot tell apart: {names}."
+    if rival:
+        out += (
+            f" An input-driven error model outside the catalogue ({rival['model']}) explains "
+            f"the data as well (Vuong p = {rival['p_value']:.2g}): the named effect may stand in "
+            "for physics that the catalogue lacks."
+        )
     return out
 
 

@@ -36,9 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, signal, stats
 
-from fmuid.discrepancy.decide import min_p
+from fmuid.discrepancy.decide import generic_tie, min_p
 from fmuid.discrepancy.residual_tests import TestResult
-from fmuid.discrepancy.scan import sensitivity_basis
+from fmuid.discrepancy.scan import CandidateFit, sensitivity_basis
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.space import BOUND_TOLERANCE
@@ -137,17 +137,38 @@ def local_model(
     return sensitivity_basis(jac[:, free]), jac[:, ~free] * inward[~free]
 
 
+def _refit(a: np.ndarray, r: np.ndarray, n_pinned: int) -> np.ndarray:
+    """Return ``r - a x`` at the least squares ``x`` whose first ``n_pinned`` entries are >= 0."""
+    if n_pinned == 0:
+        q, sv, _ = np.linalg.svd(a, full_matrices=False)
+        q = q[:, sv > 1e-8 * max(float(sv.max(initial=0.0)), 1e-300)]
+        return r - q @ (q.T @ r)
+    lower = np.r_[np.zeros(n_pinned), np.full(a.shape[1] - n_pinned, -np.inf)]
+    return -optimize.lsq_linear(a, r, bounds=(lower, np.inf), method="bvls").fun
+
+
 def constrained_drop(r: np.ndarray, phi: np.ndarray, pinned: np.ndarray) -> float:
     """Drop of ``||r - C d||^2`` (``d >= 0``) when ``Phi b`` (free) is added."""
     n = pinned.shape[1]
+    null, both = _refit(pinned, r, n), _refit(np.hstack([pinned, phi]), r, n)
+    return max(float(null @ null - both @ both), 0.0)
 
-    def best(a: np.ndarray, lower: np.ndarray) -> float:
-        sol = optimize.lsq_linear(a, r, bounds=(lower, np.inf), method="bvls")
-        return float(sol.fun @ sol.fun)
 
-    null = best(pinned, np.zeros(n))
-    both = np.hstack([pinned, phi])
-    return max(null - best(both, np.r_[np.zeros(n), np.full(phi.shape[1], -np.inf)]), 0.0)
+def fitted_residuals(
+    residuals: np.ndarray, block: Block, model: tuple[np.ndarray, np.ndarray]
+) -> np.ndarray:
+    """Weighted residuals of the fit with the error model of ``block`` added (linearised).
+
+    ``residuals`` are the fit's and ``model`` its :func:`local_model`: the parameters inside
+    their range move freely, those at a bound inward only.
+    """
+    r = np.asarray(residuals, dtype=float)
+    basis, pinned = model
+    q = block.directions
+    if not pinned.shape[1]:
+        return _refit(q, r, 0)
+    pinned_q = pinned - basis @ (basis.T @ pinned)
+    return _refit(np.hstack([pinned_q, q]), r, pinned.shape[1])
 
 
 def blocks(
@@ -199,3 +220,23 @@ def generic_test(
     k = int(np.argmin(adjusted))
     best = bank[k]
     return TestResult(NAME, None, None, adjusted[k], best.statistic, best.directions.shape[1]), best
+
+
+def describe(block: Block) -> str:
+    """Return the error model of a pole of the bank in words."""
+    return f"Laguerre filters of each input (pole {block.pole_hz:.3g} Hz) per output"
+
+
+def generic_rival(
+    best: CandidateFit,
+    residuals: np.ndarray,
+    block: Block,
+    model: tuple[np.ndarray, np.ndarray],
+    n_free: int,
+) -> dict[str, object] | None:
+    """Return the generic error model at ``block`` as a tie of ``best``, if it is one.
+
+    ``residuals``, ``model`` and ``n_free`` are the base fit's (:func:`.decide.generic_tie`).
+    """
+    fitted = fitted_residuals(residuals, block, model)
+    return generic_tie(best, fitted, n_free + block.directions.shape[1], describe(block))
