@@ -194,9 +194,9 @@ def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
 def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestResult]:
     """Residual tests of an augmented fit and the generic error-model test on top of it."""
     tests = locate.residual_tests(problem, fit)
-    residuals = safe_residuals(problem, fit.z_estimate())
-    model = local_model(problem, fit.z_estimate(), fit.jacobian)
-    generic, _ = generic_test(problem, residuals, model, seed)
+    z = fit.z_estimate()
+    model = local_model(problem, z, fit.jacobian)
+    generic, _ = generic_test(problem, safe_residuals(problem, z), model, seed)
     return [*tests, generic] if generic else tests
 
 

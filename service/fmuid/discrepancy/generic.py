@@ -139,10 +139,6 @@ def local_model(
 
 def _refit(a: np.ndarray, r: np.ndarray, n_pinned: int) -> np.ndarray:
     """Return ``r - a x`` at the least squares ``x`` whose first ``n_pinned`` entries are >= 0."""
-    if n_pinned == 0:
-        q, sv, _ = np.linalg.svd(a, full_matrices=False)
-        q = q[:, sv > 1e-8 * max(float(sv.max(initial=0.0)), 1e-300)]
-        return r - q @ (q.T @ r)
     lower = np.r_[np.zeros(n_pinned), np.full(a.shape[1] - n_pinned, -np.inf)]
     return -optimize.lsq_linear(a, r, bounds=(lower, np.inf), method="bvls").fun
 
@@ -166,7 +162,7 @@ def fitted_residuals(
     basis, pinned = model
     q = block.directions
     if not pinned.shape[1]:
-        return _refit(q, r, 0)
+        return r - q @ (q.T @ r)
     pinned_q = pinned - basis @ (basis.T @ pinned)
     return _refit(np.hstack([pinned_q, q]), r, pinned.shape[1])
 
