@@ -70,6 +70,11 @@ def _cmd_build(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else fmu_dir()
     for path in build_fmus(src, out):
         print(path)  # noqa: T201
+    from fmuid.model.native.build import compile_library, library_path
+
+    loop = library_path(out)
+    compile_library(loop)
+    print(loop)  # noqa: T201
     return EXIT_OK
 
 

@@ -8,6 +8,9 @@ direct-feedthrough output sees the input of the same instant. Between points the
 linear: FMUs that accept input derivatives (FMI 2.0 ``canInterpolateInputs``) get the slope of
 each interval; the others get the linear input sampled every ``input_step`` seconds and held
 over each sub-step (only on intervals where some input changes).
+
+The loop runs in compiled code (:mod:`fmuid.model.native`) where it can (Real/Float64 inputs
+and outputs, gcc at hand); the Python loop here is the reference it is tested against.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ import numpy as np
 
 from fmuid.model.channels import Channels
 from fmuid.model.instance import Instance
+from fmuid.model.native import run_native_cosimulation
 from fmuid.model.plan import RunPlan
 
 
@@ -27,6 +31,7 @@ def run_cosimulation(
     inputs: Channels,
     outputs: Channels,
     input_step: float | None,
+    native: bool = True,
 ) -> tuple[np.ndarray, float | None]:
     """Step an initialized FMU over the grid and read the outputs.
 
@@ -42,6 +47,8 @@ def run_cosimulation(
     input_step
         Longest sub-step [s] over which a non-interpolating FMU holds an input; None when the
         FMU gets input derivatives instead.
+    native
+        Run the compiled loop where it can run (False: always the Python loop).
 
     Returns
     -------
@@ -50,6 +57,8 @@ def run_cosimulation(
         asked to stop at, or None when it ran to the end.
 
     """
+    if native and (done := run_native_cosimulation(instance, plan, inputs, outputs, input_step)):
+        return done
     result = np.full((plan.n_rows, outputs.size), np.nan)
     times, rows_at = plan.times, plan.rows_at
     values, slopes = plan.value.tolist(), plan.slope.tolist()

@@ -56,6 +56,9 @@ class Simulator(SimulatorBase):
         The parsed FMU.
     reset_reliable
         None until the first run; then whether a reset run equals a fresh instance's run.
+    native
+        Whether co-simulation runs use the compiled master loop where it can run
+        (:mod:`fmuid.model.native`); False: the Python loop, the reference.
 
     Raises
     ------
@@ -80,6 +83,7 @@ class Simulator(SimulatorBase):
         self._fresh = True
         self._terminated = False
         self.reset_reliable = reset_reliable
+        self.native = True
         self._channels: dict[tuple[str, ...], Channels] = {}
         self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], RunPlan]] = {}
 
@@ -319,7 +323,7 @@ class Simulator(SimulatorBase):
         if not cosim:
             return run_model_exchange(instance, plan, inputs, out)
         step = None if self.model.can_interpolate_inputs else self.input_step
-        return run_cosimulation(instance, plan, inputs, out, step)
+        return run_cosimulation(instance, plan, inputs, out, step, self.native)
 
     def close(self) -> None:
         """Free the FMU instance, unload its library and delete the extracted files."""
