@@ -85,7 +85,7 @@ static int failed(FmuidLoop *L, int status, long k, int call, double t) {
 
 /*
  * Cross the moving interval [t, t + h] in n equal sub-steps, each holding the continuous
- * inputs' linear value at the sub-step's start.
+ * inputs' linear value at the sub-step's midpoint.
  */
 static int sub_steps(FmuidLoop *L, long k, double t, double h) {
     const double *v = L->value + k * L->n_in, *s = L->slope + k * L->n_in;
@@ -95,14 +95,13 @@ static int sub_steps(FmuidLoop *L, long k, double t, double h) {
     if (n < 1) n = 1;
     for (long j = 0; j < n; j++) {
         double t_j = t + h * (double)j / (double)n;
-        if (j) {
-            for (long i = 0; i < L->n_cont; i++) {
-                long c = L->cont_index[i];
-                u[i] = v[c] + s[c] * (t_j - t);
-            }
-            status = set_values(L, L->cont_refs, L->n_cont, u);
-            if (status > 1) return failed(L, status, k, CALL_SUB_SET, t_j);
+        double t_mid = t + h * ((double)j + 0.5) / (double)n;
+        for (long i = 0; i < L->n_cont; i++) {
+            long c = L->cont_index[i];
+            u[i] = v[c] + s[c] * (t_mid - t);
         }
+        status = set_values(L, L->cont_refs, L->n_cont, u);
+        if (status > 1) return failed(L, status, k, CALL_SUB_SET, t_mid);
         status = step(L, t_j, t + h * ((double)j + 1.0) / (double)n - t_j);
         if (status > 1) return failed(L, status, k, CALL_STEP, t_j);
     }
@@ -136,7 +135,7 @@ int fmuid_cosimulation(FmuidLoop *L) {
             }
         }
         if (k == last) break;
-        if (L->moving != NULL && L->moving[k] && L->times[k + 1] - t > L->sub_step) {
+        if (L->moving != NULL && L->moving[k]) {
             status = sub_steps(L, k, t, L->times[k + 1] - t);
             if (status > 1) return status;
         } else {

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+from typing import Any, cast
 
 import numpy as np
 
@@ -40,7 +41,7 @@ class Loop(ctypes.Structure):
 
 def _address(instance: Instance, name: str) -> int | None:
     function = instance.f.get(name)
-    return None if function is None else ctypes.cast(function, _P).value
+    return None if function is None else ctypes.cast(cast(Any, function), _P).value
 
 
 def _pointer(array: np.ndarray | ctypes.Array) -> int:  # type: ignore[type-arg]
