@@ -53,6 +53,6 @@ class SimulatorBase:
         if model.can_interpolate_inputs:
             return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
         return (
-            "co-simulation, linear inputs at each sub-step's midpoint value held over sub-steps "
-            f"of at most {self.input_step:g} s"
+            f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s "
+            "at each sub-step's midpoint value"
         )
