@@ -101,7 +101,7 @@ def test_diagnose_writes_the_verdict_and_a_report(msd_fmu, tmp_path, capsys):
     assert result["verdict"] in stdout
     # no annotation in the msd FMU: generic candidates named by its input and output
     labels = {next(iter(c["parameters"])) for c in result["candidates"]}
-    assert labels == {"tau_sensor", "delay_f", "tau_f", "offset_f", "bias_x"}
+    assert labels == {"tau_outputs", "delay_f", "tau_f", "offset_f", "bias_x"}
     page = (tmp_path / "report" / "index.html").read_text()
     assert "Verdict" in page and result["verdict"] in page
 
