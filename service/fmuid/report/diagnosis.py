@@ -209,7 +209,8 @@ def _units(problem: Problem | None) -> dict[str, str]:
     if problem is None:
         return {}
     units = problem.units()
-    for candidate in study_catalogue(problem):
+    start = {n: p.start for n, p in problem.parameter_specs.items()}
+    for candidate in study_catalogue(problem, start):
         units.update({p.name: p.unit for p in candidate.parameters if p.unit})
     return units
 
