@@ -8,8 +8,8 @@ from typing import Any
 from fmuid.data import ParameterSpec
 from fmuid.discrepancy import explain
 from fmuid.discrepancy.decide import Tie
-from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.effects import DeclaredPhysics, Effect
+from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.result import AddedEstimate, EffectStep, verdict
 from fmuid.discrepancy.settle import hypothesis_names
 

@@ -10,8 +10,8 @@ import pytest
 
 from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.discrepancy.catalogue import catalogue
-from fmuid.estimation.study import make_problem
 from fmuid.discrepancy.knowledge import model_knowledge, read_annotations
+from fmuid.estimation.study import make_problem
 
 PACKAGE = Path(__file__).resolve().parents[2] / "service" / "fmuid" / "discrepancy"
 

@@ -100,8 +100,11 @@ def _signed(name: str, unit: str, meaning: str, bound: float) -> AddedParameter:
 
 
 def _nonlinear(name: str, unit: str, meaning: str, bound: float) -> AddedParameter:
-    """A signed coefficient of a nonlinear term: probed at 1 % of its bound, screened on a
-    grid spread over three decades on both sides (its effect is far from linear)."""
+    """Return a signed coefficient of a nonlinear term, probed at 1 % of its bound.
+
+    Its screen tries a grid spread over three decades on both sides (its effect is far from
+    linear in the coefficient).
+    """
     steps = [f * bound for f in SPREAD]
     grid = tuple(sorted([*steps, *(-v for v in steps)]))
     return AddedParameter(name, unit, meaning, _spec(0.0, -bound, bound, "lin"), 0.0, "inside",
