@@ -20,6 +20,7 @@ def diagnose(
     progress: ProgressCallback | None = None,
     options: DiagnoseOptions = DiagnoseOptions(),
     problem: Problem | None = None,
+    test_data: Sequence[Experiment] = (),
 ) -> Diagnosis:
     """Fit the spec's model, test its residuals and explain a mismatch by left-out physics.
 
@@ -39,6 +40,9 @@ def diagnose(
     problem
         The problem ``fmuid.estimation.study.make_problem`` built of these inputs (default:
         built here).
+    test_data
+        Held-out experiments: the base and each augmented model are simulated on them
+        (``validation``: RMS simulation error per file and output, before and after).
 
     Returns
     -------
@@ -49,4 +53,4 @@ def diagnose(
     from fmuid.estimation.study import make_problem
 
     problem = problem or make_problem(fmu_path, experiments, spec)
-    return diagnose_problem(problem, options=options, progress=progress)
+    return diagnose_problem(problem, options=options, progress=progress, test_data=test_data)
