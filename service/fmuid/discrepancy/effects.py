@@ -25,42 +25,8 @@ from typing import ClassVar
 import numpy as np
 
 from fmuid.discrepancy.knowledge import AddedParameter
+from fmuid.discrepancy.words import ORDINAL, Words, num
 from fmuid.model.feedback import FeedbackTerm
-
-_ORDINAL = {2: "square", 3: "cube", 4: "fourth power", 5: "fifth power"}
-_QUANTITY = {
-    "N": "force", "kN": "force", "N.m": "torque", "N m": "torque", "Nm": "torque",
-    "m": "displacement", "mm": "displacement", "rad": "angle", "deg": "angle",
-    "m/s": "velocity", "rad/s": "angular rate", "V": "voltage", "A": "current",
-}  # fmt: skip
-
-
-@dataclass(frozen=True)
-class Words:
-    """Units and declared roles of the FMU's variables, for the effects' sentences."""
-
-    units: Mapping[str, str] = field(default_factory=dict)
-    roles: Mapping[str, str] = field(default_factory=dict)
-
-    def unit(self, name: str) -> str:
-        """Return the declared unit of a variable ('' when none)."""
-        return self.units.get(name, "") or ""
-
-    def quantity(self, name: str) -> str | None:
-        """Return what a variable's unit measures (``"force"`` for N), if the unit says."""
-        return _QUANTITY.get(self.unit(name))
-
-    def variable(self, name: str, side: str) -> str:
-        """How a sentence names an input or output: by its role, else by name and unit."""
-        role = self.roles.get(name)
-        if role:
-            return f"the {role} {side} {name}"
-        unit = self.unit(name)
-        return f"{side} {name}" + (f" [{unit}]" if unit else "")
-
-
-def _num(value: float) -> str:
-    return f"{value:.3g}"
 
 
 @dataclass(frozen=True)
@@ -137,7 +103,7 @@ class InputOffset(Effect):
         unit = self.words.unit(self.target)
         return (
             f"{self.words.variable(self.target, 'input')} carries a constant offset of "
-            f"{_num(self.value(values))} {unit}".rstrip()
+            f"{num(self.value(values))} {unit}".rstrip()
         )
 
 
@@ -176,7 +142,7 @@ class InputDeadZone(Effect):
         unit = self.words.unit(self.target)
         return (
             f"{self.words.variable(self.target, 'input')} has no effect inside a dead zone of "
-            f"+-{_num(self.value(values))} {unit}".rstrip()
+            f"+-{num(self.value(values))} {unit}".rstrip()
         )
 
 
@@ -196,7 +162,7 @@ class InputSaturation(Effect):
         unit = self.words.unit(self.target)
         return (
             f"{self.words.variable(self.target, 'input')} saturates at "
-            f"+-{_num(self.value(values))} {unit}".rstrip()
+            f"+-{num(self.value(values))} {unit}".rstrip()
             + " (the actuator cannot deliver more)"
         )
 
@@ -220,7 +186,7 @@ class InputLag(Effect):
         )  # fmt: skip
         return (
             f"{self.words.variable(self.target, 'input')} acts through a first-order "
-            f"{actuator} lag of time constant {_num(self.value(values))} s"
+            f"{actuator} lag of time constant {num(self.value(values))} s"
         )
 
 
@@ -234,7 +200,7 @@ class InputDelay(Effect):
         """Delay sentence."""
         return (
             f"the model sees {self.words.variable(self.target, 'input')} about "
-            f"{_num(self.value(values))} s late (dead time)"
+            f"{num(self.value(values))} s late (dead time)"
         )
 
 
@@ -255,7 +221,7 @@ class OutputLag(Effect):
         )  # fmt: skip
         return (
             f"{what} the model by a first-order filter of time constant "
-            f"{_num(self.value(values))} s (a sensor's or a recorder's filter)"
+            f"{num(self.value(values))} s (a sensor's or a recorder's filter)"
         )
 
 
@@ -294,7 +260,7 @@ class OutputBias(Effect):
         sensor = " (a sensor bias)" if self.target not in self.words.roles else ""
         return (
             f"{self.words.variable(self.target, 'output')} is recorded with a constant bias "
-            f"of {_num(self.value(values))} {unit}".rstrip()
+            f"of {num(self.value(values))} {unit}".rstrip()
             + sensor
         )
 
@@ -318,7 +284,7 @@ class OutputSaturation(Effect):
         where = "above" if self.upper else "below"
         return (
             f"{self.words.variable(self.target, 'output')} cannot go {where} "
-            f"{_num(self.value(values))} {unit}".rstrip()
+            f"{num(self.value(values))} {unit}".rstrip()
             + " (a sensor's range or a physical limit such as an overflow)"
         )
 
@@ -340,9 +306,9 @@ class FeedbackPolynomial(Effect):
         """Physical words: a spring-like force when a force is driven by a displacement."""
         c = self.value(values)
         w = self.words
-        power = _ORDINAL.get(self.power, f"power {self.power}")
+        power = ORDINAL.get(self.power, f"power {self.power}")
         unit = f"{w.unit(self.target)}/{w.unit(self.source)}^{self.power}".strip("/^")
-        coefficient = f"{self.parameters[0].name} = {_num(c)} {unit}".rstrip()
+        coefficient = f"{self.parameters[0].name} = {num(c)} {unit}".rstrip()
         force, level = w.quantity(self.target), w.quantity(self.source)
         if force in ("force", "torque") and level in ("displacement", "angle"):
             if self.power % 2:
@@ -395,12 +361,12 @@ class FeedbackFriction(Effect):
         force = w.quantity(self.target) or "term"
         if f >= 0:
             return (
-                f"Coulomb friction: a {force} of {_num(f)} {unit} on "
+                f"Coulomb friction: a {force} of {num(f)} {unit} on "
                 f"{w.variable(self.target, 'input')} opposing the motion, switching sign with "
                 f"{rate}".replace("  ", " ")
             )
         return (
-            f"a {force} of {_num(-f)} {unit} on {w.variable(self.target, 'input')} that follows "
+            f"a {force} of {num(-f)} {unit} on {w.variable(self.target, 'input')} that follows "
             f"the sign of {rate} (it pushes the motion on, unlike friction)".replace("  ", " ")
         )
 
@@ -421,7 +387,7 @@ class DeclaredPhysics(Effect):
     def sentence(self, values: Mapping[str, float]) -> str:
         """Return the declaration's own words with the first parameter's value."""
         p = self.parameters[0]
-        value = f"{p.name} = {_num(values[p.name])} {p.unit}".rstrip()
+        value = f"{p.name} = {num(values[p.name])} {p.unit}".rstrip()
         return f"{self.description} ({value})"
 
 

@@ -26,7 +26,6 @@
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -40,30 +39,25 @@ from fmuid.discrepancy import residual_tests as rt
 from fmuid.discrepancy.absorb import absorbed
 from fmuid.discrepancy.catalogue import study_catalogue
 from fmuid.discrepancy.correction import arx_correction
-from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.forward import Step, forward
 from fmuid.discrepancy.generic import describe, generic_rival, generic_test, local_model
-from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.levels import level_location
-from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis, EffectStep
-from fmuid.discrepancy.scan import CandidateFit, Scanner, augmented, scan
+from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
+from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
+from fmuid.discrepancy.scan import augmented
 from fmuid.discrepancy.settle import settles, settling_tests
 from fmuid.discrepancy.validate import coupling_error, validation
 from fmuid.estimation.optimize import (
     FitOptions,
     fit_problem,
-    jacobian,
-    make_fit_result,
-    refine,
     safe_residuals,
 )
 from fmuid.estimation.problem import Problem
-from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.result import FitResult
 from fmuid.estimation.series import residual_series as fit_series
 from fmuid.profiling.engine import profile_problem
-from fmuid.profiling.result import ProfileResult
 from fmuid.profiling.walk import WalkOptions
-from fmuid.progress import Progress, ProgressCallback
+from fmuid.progress import ProgressCallback
 
 log = logging.getLogger(__name__)
 
@@ -115,91 +109,6 @@ class DiagnoseOptions:
     )
 
 
-def _fit_of(problem: Problem, z: np.ndarray, chi2: float, t0: float) -> FitResult:
-    return make_fit_result(problem, z, chi2, jacobian(problem, z), "", False, t0, 0)
-
-
-def _score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
-    return CandidateScore(
-        f.candidate.effect, f.values, f.chi2, f.p_value, f.bic, f.stage, f.statistic,
-        p_adjusted, f.fitted,
-    )  # fmt: skip
-
-
-def _added_estimates(
-    prof: ProfileResult, added: Sequence[AddedParameter], confidence: float
-) -> dict[str, AddedEstimate]:
-    """Estimates, intervals and off-value checks of the added parameters from their profiles."""
-    return {
-        p.name: AddedEstimate.of(
-            prof.fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise, confidence
-        )
-        for p in added
-    }
-
-
-class _Run:
-    """State of one diagnosis: the problem, options, progress and the simulations spent."""
-
-    def __init__(self, problem: Problem, opts: DiagnoseOptions, progress: ProgressCallback | None):
-        self.problem = problem
-        self.opts = opts
-        self.progress = progress
-        self.t0 = time.perf_counter()
-        self.sims0 = problem.simulations
-        self.made: dict[int, Problem] = {}
-        self.extra = 0
-        self.done = 0
-        self.total = 1
-
-    def spent(self) -> int:
-        made = sum(p.simulations for p in self.made.values())
-        return self.problem.simulations - self.sims0 + made + self.extra
-
-    def report(self, detail: str) -> None:
-        self.done += 1
-        if self.progress:
-            self.progress(Progress("diagnose", self.done, max(self.total, self.done), detail))
-
-    def scan_round(
-        self, scanner: Scanner, pool: list[Effect], stage: int
-    ) -> tuple[list[CandidateFit], list[float]]:
-        def seen(f: CandidateFit) -> None:
-            self.made[id(f.problem)] = f.problem
-            self.report(f"round {stage}: {f.candidate.label} chi2 {f.chi2:.4g}")
-
-        fits = scan(
-            scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
-            options=self.opts.fit, stage=stage, on_candidate=seen,
-        )  # fmt: skip
-        return fits, decide.min_p(fits, self.problem.spec.seed + stage)
-
-    def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
-        """Count a profile: its problem's simulations, and those of worker processes."""
-        self.made[id(problem)] = problem
-        if self.opts.workers != 1:
-            self.extra += spent_elsewhere
-
-    def cost(self) -> Cost:
-        return Cost(self.spent(), time.perf_counter() - self.t0)
-
-
-def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
-    """Profile-likelihood intervals of an equally good candidate's added parameters."""
-    tie_fit = _fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
-    prof = profile_problem(
-        tie.problem,
-        tie_fit,
-        only=list(tie.candidate.names),
-        workers=run.opts.workers,
-        options=run.opts.walk,
-        confidence=run.opts.ci_confidence,
-    )
-    run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
-    estimates = _added_estimates(prof, tie.candidate.parameters, run.opts.ci_confidence)
-    return {name: e.to_dict() for name, e in estimates.items()}
-
-
 def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestResult]:
     """Residual tests of an augmented fit and the generic error-model test on top of it."""
     tests = locate.residual_tests(problem, fit)
@@ -207,34 +116,6 @@ def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestRes
     model = local_model(problem, z, fit.jacobian)
     generic, _ = generic_test(problem, safe_residuals(problem, z), model, seed)
     return [*tests, generic] if generic else tests
-
-
-def _recheck_base(run: _Run, fit: FitResult, best: CandidateFit) -> FitResult | None:
-    """Re-fit the base model from the best candidate's base parameters; a lower chi2 wins."""
-    names = run.problem.names
-    start = run.problem.to_z({n: best.problem.from_z(best.z)[n] for n in names})
-    z, chi2, _ = refine(run.problem, start, options=run.opts.fit)
-    if chi2 < fit.chi2 - 1e-6 * max(1.0, fit.chi2):
-        log.info("base fit improved from %.6g to %.6g by a candidate's start", fit.chi2, chi2)
-        return _fit_of(run.problem, z, chi2, time.perf_counter())
-    return None
-
-
-def _scan_base(
-    run: _Run, fit: FitResult, cands: list[Effect]
-) -> tuple[FitResult, Scanner, list[CandidateFit], list[float]]:
-    """Scan the catalogue on the base fit (once more if a candidate revealed a better base)."""
-    for _ in range(2):
-        scanner = Scanner(run.problem, fit.z_estimate(), fit.jacobian)
-        fits, adjusted = run.scan_round(scanner, cands, 1)
-        best = fits[0]
-        if not best.fitted or best.p_value >= run.opts.screen_level:
-            break
-        better = _recheck_base(run, fit, best)
-        if better is None:
-            break
-        fit = better
-    return fit, scanner, fits, adjusted
 
 
 def _correction(
@@ -296,13 +177,13 @@ def diagnose_problem(
 
     """
     opts = options
-    run = _Run(problem, opts, progress)
+    run = Run(problem, opts, progress)
     if fit is None:
         fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)
     cands = study_catalogue(problem, fit.estimates)
     run.total = 3 * len(cands) + 5
     # 1-2. locate and scan
-    fit, scanner, fits, adjusted = _scan_base(run, fit, cands)
+    fit, scanner, fits, adjusted = scan_base(run, fit, cands)
     tests_before = locate.residual_tests(problem, fit)
     agreement = locate.experiments_disagree(problem, fit, opts.agreement_nfev)
     model = local_model(problem, scanner.z, scanner.jac)
@@ -333,7 +214,7 @@ def diagnose_problem(
         return Diagnosis(
             mismatch=False, tests_after=tuple(tests_before), effect=None,
             description=explain.no_mismatch(opts.alpha, scan_test.p_value),
-            candidates=tuple(_score(f, a) for f, a in zip(fits, adjusted)), added_parameters={},
+            candidates=tuple(score(f, a) for f, a in zip(fits, adjusted)), added_parameters={},
             chi2_after=fit.chi2, lrt_p_value=None, bic_after=bic_before,
             parameters_after=dict(fit.estimates),
             validation=tuple(validation(base_model, test_data)),
@@ -341,7 +222,7 @@ def diagnose_problem(
         )  # fmt: skip
     # 4. add effects while a round's best candidate is significant
     steps, scored = forward(scanner, (fits, adjusted), cands, run.scan_round, opts.alpha, opts.fit)
-    scores = [_score(f, a) for f, a in scored]
+    scores = [score(f, a) for f, a in scored]
     seed_after = problem.spec.seed + 1
     if not steps:
         correction = _correction(problem, fit.estimates, generic, pole)
@@ -358,7 +239,7 @@ def diagnose_problem(
     best = steps[0].fit
     applied = [s.effect for s in steps]
     aug, z = steps[-1].fit.problem, steps[-1].fit.z
-    final_fit = _fit_of(aug, z, steps[-1].fit.chi2, run.t0)
+    final_fit = fit_of(aug, z, steps[-1].fit.chi2, run.t0)
     tests_after = _tests_after(aug, final_fit, seed_after)
     run.report("tests of the augmented model")
     # 5. profile the added parameters, then the original ones before and after
@@ -369,7 +250,7 @@ def diagnose_problem(
     )  # fmt: skip
     run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
-    estimates = _added_estimates(prof, added, opts.ci_confidence)
+    estimates = added_estimates(prof, added, opts.ci_confidence)
     run.report("profiles of the added parameters")
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:
@@ -386,7 +267,7 @@ def diagnose_problem(
     }
     rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
     ties = decide.ties(best, rivals) if len(applied) == 1 else []
-    tied = [{**t.to_dict(), "intervals": _tie_intervals(run, t.fit)} for t in ties]
+    tied = [{**t.to_dict(), "intervals": tie_intervals(run, t.fit)} for t in ties]
     tests = settling_tests(problem, best, ties) if opts.discriminate else []
     for entry, test in zip(tied, tests):
         entry["expected_separation"] = round(test.expected_chi2, 4)
