@@ -99,12 +99,13 @@ class InputOffset(Effect):
         return u + self.value(p)
 
     def sentence(self, values: Mapping[str, float]) -> str:
-        """Offset sentence."""
+        """Offset sentence (a declared role names it: a steer offset)."""
         unit = self.words.unit(self.target)
-        return (
-            f"{self.words.variable(self.target, 'input')} carries a constant offset of "
-            f"{num(self.value(values))} {unit}".rstrip()
-        )
+        size = f"{num(self.value(values))} {unit}".rstrip()
+        role = self.words.roles.get(self.target)
+        if role:
+            return f"a {role} offset of {size}: {self.target} acts as measured + {size}"
+        return f"{self.words.variable(self.target, 'input')} carries a constant offset of {size}"
 
 
 class InputGain(Effect):
@@ -255,13 +256,15 @@ class OutputBias(Effect):
         return y + self.value(p)
 
     def sentence(self, values: Mapping[str, float]) -> str:
-        """Bias sentence."""
+        """Bias sentence (a declared role names it: a gyro bias)."""
         unit = self.words.unit(self.target)
-        sensor = " (a sensor bias)" if self.target not in self.words.roles else ""
+        size = f"{num(self.value(values))} {unit}".rstrip()
+        role = self.words.roles.get(self.target)
+        if role:
+            return f"a {role} bias of {size}: {self.target} is recorded as modelled + {size}"
         return (
             f"{self.words.variable(self.target, 'output')} is recorded with a constant bias "
-            f"of {num(self.value(values))} {unit}".rstrip()
-            + sensor
+            f"of {size} (a sensor bias)"
         )
 
 
