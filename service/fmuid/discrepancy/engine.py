@@ -44,7 +44,7 @@ from fmuid.discrepancy.generic import describe, generic_rival, generic_test, loc
 from fmuid.discrepancy.levels import level_location
 from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
 from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
-from fmuid.discrepancy.scan import augmented
+from fmuid.discrepancy.scan import CandidateFit, augmented
 from fmuid.discrepancy.settle import settles, settling_tests
 from fmuid.discrepancy.validate import coupling_error, validation
 from fmuid.estimation.optimize import (
@@ -221,9 +221,16 @@ def diagnose_problem(
             cost=run.cost(), **common,
         )  # fmt: skip
     # 4. add effects while a round's best candidate is significant
-    steps, scored = forward(scanner, (fits, adjusted), cands, run.scan_round, opts.alpha, opts.fit)
-    scores = [score(f, a) for f, a in scored]
     seed_after = problem.spec.seed + 1
+
+    def misfit_left(f: CandidateFit) -> bool:
+        fitted = fit_of(f.problem, f.z, f.chi2, run.t0)
+        return bool(rt.holm(_tests_after(f.problem, fitted, seed_after), opts.alpha))
+
+    steps, scored = forward(
+        scanner, (fits, adjusted), cands, run.scan_round, opts.alpha, opts.fit, misfit_left
+    )
+    scores = [score(f, a) for f, a in scored]
     if not steps:
         correction = _correction(problem, fit.estimates, generic, pole)
         run.report("generic correction")

@@ -1,10 +1,10 @@
 """Forward selection: add effects one at a time while the scan on top of the model finds one.
 
 Round 1 scans the catalogue on the base fit (:mod:`.scan`). When its best candidate is
-significant after the round's min-P adjustment at the family-wise level, it is added and the
-remaining candidates are scanned on top of the augmented model (round 2), and so on up to
-:data:`MAX_EFFECTS`. Each round is one test at the same level, so a false addition at any step
-has probability at most that level. After the second addition, the first is dropped when the
+significant after the round's min-P adjustment at the family-wise level, it is added; while
+the augmented model's residuals still fail a test, the remaining candidates are scanned on top
+of it (round 2), and so on up to :data:`MAX_EFFECTS`. Each round is one test at the same
+level, so a false addition at any step has probability at most that level. After the second addition, the first is dropped when the
 second alone explains the data as well (its chi2 drop over the second alone is not
 significant): the first effect was standing in for the second.
 """
@@ -73,6 +73,7 @@ def forward(
     scan_round: Round,
     alpha: float,
     options: FitOptions,
+    misfit_left: Callable[[CandidateFit], bool],
 ) -> tuple[list[Step], list[tuple[CandidateFit, float]]]:
     """Add effects while a round's best candidate is significant.
 
@@ -90,6 +91,9 @@ def forward(
         Family-wise level of each round.
     options
         Full-fit settings.
+    misfit_left
+        Whether an augmented model's residuals still fail a test (another round is scanned
+        only then).
 
     Returns
     -------
@@ -117,6 +121,8 @@ def forward(
         steps.append(Step(best, current.chi2, adjusted[0]))
         if stage == 2:
             steps = _drop_stand_in(scanner, first, steps, options, alpha)
+        if stage == MAX_EFFECTS or not misfit_left(steps[-1].fit):
+            break
         current = _scanner(steps[-1].fit)
     return steps, scored
 
