@@ -4,9 +4,9 @@ Round 1 scans the catalogue on the base fit (:mod:`.scan`). When its best candid
 significant after the round's min-P adjustment at the family-wise level, it is added; while
 the augmented model's residuals still fail a test, the remaining candidates are scanned on top
 of it (round 2), and so on up to :data:`MAX_EFFECTS`. Each round is one test at the same
-level, so a false addition at any step has probability at most that level. After the second addition, the first is dropped when the
-second alone explains the data as well (its chi2 drop over the second alone is not
-significant): the first effect was standing in for the second.
+level, so a false addition at any step has probability at most that level. After the second
+addition, the first is dropped when the second alone explains the data as well (its chi2 drop
+over the second alone is not significant): the first effect was standing in for the second.
 """
 
 from __future__ import annotations
