@@ -27,7 +27,7 @@ EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 _DESCRIPTION = (
     "Which FMU parameters can your measurements pin down, and why do model and data disagree? "
     "Fit, profile likelihoods and diagnosis of FMI 2.0/3.0 FMUs; built-in models: "
-    "tractor_implement, msd, msd_parallel."
+    "tractor_implement, msd, msd_parallel, emps."
 )
 
 
