@@ -82,10 +82,11 @@ class Problem:
         self.predictor: Predictor = predictor or FmuPredictor(self.model, spec.fixed, inputs)
         self.masks = [
             [
-                exp.output_mask(o) if o in exp.columns else np.zeros(exp.n_rows, bool)
+                exp.output_mask(o) & kept if o in exp.columns else np.zeros(exp.n_rows, bool)
                 for o in self.outputs
             ]
             for exp in self.experiments
+            for kept in [settled_rows(exp, spec.settle)]
         ]
         self.data = [
             [
@@ -105,7 +106,8 @@ class Problem:
         ]
         self.n_data = int(sum(m.sum() for ms in self.masks for m in ms))
         if self.n_data == 0:
-            raise DataError("no output samples to fit in any experiment")
+            after = f" after the {spec.settle:g} s settle window" if spec.settle else ""
+            raise DataError(f"no output samples to fit in any experiment{after}")
         self.simulations = 0
 
     @property
@@ -223,6 +225,11 @@ class Problem:
                 for i, exp in enumerate(self.experiments):
                     sigma[i][o] = np.full(exp.n_rows, float(setting))
         return sigma, method
+
+
+def settled_rows(experiment: Experiment, settle: float) -> np.ndarray:
+    """Rows of ``experiment`` after its settle-in window (its first ``settle`` seconds)."""
+    return experiment.time >= experiment.time[0] + settle
 
 
 def _fmt(values: Mapping[str, float]) -> str:
