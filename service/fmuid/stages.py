@@ -10,13 +10,14 @@ from typing import Any
 import numpy as np
 
 from fmuid.data import Experiment, Spec
+from fmuid.data.checks import check_test_data
 from fmuid.errors import DataError, FmuError, SpecError
 from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
 from fmuid.estimation.study import make_problem
-from fmuid.estimation.validation import check_test_data, held_out_rms
+from fmuid.estimation.validation import held_out_rms
 from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from fmuid.data import Experiment, ParameterSpec, Spec, used_inputs
+from fmuid.data.checks import settled_rows
 from fmuid.errors import DataError, FmuError
 from fmuid.estimation.predictor import FmuPredictor, Predictor
 from fmuid.estimation.sigma import SPLINE_METHOD, spline_residual_sigma
@@ -225,11 +226,6 @@ class Problem:
                 for i, exp in enumerate(self.experiments):
                     sigma[i][o] = np.full(exp.n_rows, float(setting))
         return sigma, method
-
-
-def settled_rows(experiment: Experiment, settle: float) -> np.ndarray:
-    """Rows of ``experiment`` after its settle-in window (its first ``settle`` seconds)."""
-    return experiment.time >= experiment.time[0] + settle
 
 
 def _fmt(values: Mapping[str, float]) -> str:

@@ -8,18 +8,18 @@ free from its start state with the test experiment's inputs.
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from fmuid.data import Experiment, Spec, check_against_model
-from fmuid.errors import DataError, FmuError
+from fmuid.data import Experiment
+from fmuid.data.checks import settled_rows
+from fmuid.errors import FmuError
 from fmuid.estimation.predictor import Predictor
-from fmuid.estimation.problem import settled_rows
 
-__all__ = ["ValidationEntry", "check_test_data", "held_out_rms"]
+__all__ = ["ValidationEntry", "held_out_rms"]
 
 
 @dataclass(frozen=True)
@@ -69,35 +69,6 @@ class ValidationEntry:
         return out
 
 
-def check_test_data(
-    spec: Spec,
-    parameters: Collection[str],
-    inputs: Collection[str],
-    outputs: Collection[str],
-    experiments: Sequence[Experiment],
-) -> None:
-    """Check test experiments as the estimation data are checked, and that each has an output.
-
-    Raises
-    ------
-    SpecError, DataError
-        Naming the test file and column at fault.
-
-    """
-    check_against_model(spec, parameters, inputs, outputs, experiments)
-    for exp in experiments:
-        if not any(o in exp.columns for o in spec.outputs):
-            raise DataError(
-                f"{exp.name}: a test file needs at least one fitted output column "
-                f"({', '.join(spec.outputs)})"
-            )
-        kept = settled_rows(exp, spec.settle)
-        if not any(exp.output_mask(o)[kept].any() for o in spec.outputs if o in exp.columns):
-            raise DataError(
-                f"{exp.name}: no output sample after the {spec.settle:g} s settle window"
-            )
-
-
 def held_out_rms(
     predictor: Predictor,
     values: Mapping[str, float],
@@ -115,7 +86,7 @@ def held_out_rms(
     values
         Parameter values for ``predictor`` (e.g. a fit's estimates).
     experiments
-        The test experiments (checked with :func:`check_test_data`).
+        The test experiments (checked with :func:`fmuid.data.checks.check_test_data`).
     outputs
         The outputs compared (the spec's); an output a file lacks is skipped for that file.
     settle
