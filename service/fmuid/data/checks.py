@@ -158,12 +158,16 @@ def check_test_data(
 ) -> None:
     """Check test experiments as the estimation data are checked, and that each has an output.
 
+    No test experiments: nothing to check.
+
     Raises
     ------
     SpecError, DataError
         Naming the test file and column at fault.
 
     """
+    if not experiments:
+        return
     check_against_model(spec, parameters, inputs, outputs, experiments)
     for exp in experiments:
         if not any(o in exp.columns for o in spec.outputs):
