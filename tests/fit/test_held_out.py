@@ -122,3 +122,13 @@ def test_cli_takes_test_data_and_settle(msd_fmu, tmp_path, capsys):
     assert entry["rms_base"] < 1e-4
     with pytest.raises(SystemExit):
         main([str(a) for a in [*args[:-4], "--settle", "-1"]])
+
+
+@pytest.mark.slow
+def test_profile_reports_the_validation_at_its_best_fit(msd_fmu):
+    data = experiment("est.csv", msd_x(), T)
+    test = experiment("b.csv", msd_x() + 0.02, T)
+    result = fmuid.profile(msd_fmu, [data], spec(), test_data=[test], workers=1).to_dict()
+    (entry,) = result["validation"]
+    assert entry["experiment"] == "b.csv"
+    assert entry["rms_base"] == pytest.approx(0.02, rel=1e-3)
