@@ -201,9 +201,11 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.discrepancy import diagnose
 
     fmu, experiments, spec, problem = _load_inputs(args)
-    held_out = {"test_data": _test_data(args)} if args.test_data else {}
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
-        result = diagnose(fmu, experiments, spec, progress=progress, problem=problem, **held_out)
+        result = diagnose(
+            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)

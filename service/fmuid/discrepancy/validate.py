@@ -15,55 +15,30 @@ import numpy as np
 from fmuid.data import Experiment
 from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.estimation.problem import Problem
-
-
-def settle_seconds(problem: Problem) -> float:
-    """Return the spec's settle-in window [s] (0 when the spec has none)."""
-    return float(getattr(problem.spec, "settle", 0.0) or 0.0)
-
-
-def rms_errors(
-    problem: Problem, values: Mapping[str, float], experiments: Sequence[Experiment]
-) -> dict[tuple[str, str], tuple[int, float]]:
-    """RMS simulation error per test experiment and fitted output: ``{(exp, out): (n, rms)}``.
-
-    Outputs a test file does not record are left out.
-    """
-    settle = settle_seconds(problem)
-    out: dict[tuple[str, str], tuple[int, float]] = {}
-    for exp in experiments:
-        names = [o for o in problem.outputs if o in exp.columns]
-        if not names:
-            continue
-        y = problem.predictor.predict(dict(values), exp, names)
-        problem.simulations += 1
-        kept = exp.time >= exp.time[0] + settle
-        for j, o in enumerate(names):
-            mask = exp.output_mask(o) & kept
-            error = y[mask, j] - exp.columns[o][mask]
-            out[(exp.name, o)] = (int(mask.sum()), float(np.sqrt(np.mean(error**2))))
-    return out
+from fmuid.estimation.validation import held_out_rms
 
 
 def validation(
     models: Sequence[tuple[Problem, Mapping[str, float]]], experiments: Sequence[Experiment]
 ) -> list[dict[str, Any]]:
-    """Contract entries of the base model (first) and each augmented model after it.
+    """Return the contract's entries for the base model (first) and each model after it.
 
-    Each entry: experiment, output, n, ``rms_base``, ``rms_by_step`` (after each added effect)
-    and ``rms_final`` (the last model's; the base's when nothing was added).
+    Each entry: experiment, output, n, ``rms_base``, ``rms_by_step`` (the base, then after each
+    added effect) and ``rms_final`` (the last model's).
     """
     if not experiments:
         return []
-    runs = [rms_errors(problem, values, experiments) for problem, values in models]
-    entries = []
-    for (exp, output), (n, base) in runs[0].items():
-        steps = [run[(exp, output)][1] for run in runs[1:]]
-        entries.append({
-            "experiment": exp, "output": output, "n": n, "rms_base": base,
-            "rms_final": steps[-1] if steps else base, "rms_by_step": steps,
-        })  # fmt: skip
-    return entries
+    runs = []
+    for problem, values in models:
+        found = held_out_rms(
+            problem.predictor, values, experiments, problem.outputs, settle=problem.spec.settle
+        )
+        problem.simulations += len(experiments)
+        runs.append({(e.experiment, e.output): e for e in found})
+    return [
+        entry.with_steps([run[key].rms_base for run in runs]).to_dict()
+        for key, entry in runs[0].items()
+    ]
 
 
 def coupling_error(problem: Problem, values: Mapping[str, float]) -> float | None:
