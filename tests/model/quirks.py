@@ -16,12 +16,15 @@ from fmuid.model.builtin import model_src_dir
 FMUS_SRC = Path(__file__).parent / "fmus_src"
 
 LAYERS = {"setup_resets": "setup_experiment_resets.c"}
-"""Model -> the FMI layer that replaces the shared one."""
+"""Model -> the FMI layer that replaces the shared one by default."""
 
 
-def build_quirk_fmu(name: str, out_dir: Path) -> Path:
-    """Compile ``fmus_src/<name>`` into ``<out_dir>/<name>.fmu`` (with its own layer, if any)."""
-    layer = LAYERS.get(name)
+def build_quirk_fmu(name: str, out_dir: Path, layer: str | None = None) -> Path:
+    """Compile ``fmus_src/<name>`` into ``<out_dir>/<name>.fmu``.
+
+    ``layer`` (a file of ``fmus_src``) replaces the shared FMI layer; default: ``LAYERS``'s.
+    """
+    layer = layer or LAYERS.get(name)
     if layer is None:
         return build_fmu(model_src_dir(), FMUS_SRC / name, out_dir)
     src = out_dir / "src"

@@ -2,17 +2,21 @@
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from fmuid.errors import FmuidError
+from fmuid.errors import FmuError, FmuidError
 from fmuid.estimation.optimize import safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.model.simulator import Simulator
+from fmuid.model.smoke import held_parameters
+
+log = logging.getLogger(__name__)
 
 #: Relative step of the noise probe (scipy's default finite-difference step in fitted coordinates).
 PROBE_STEP = 1e-6
@@ -49,6 +53,9 @@ class Health:
         The finite-difference step chosen for the re-fits (relative, fitted coordinates).
     simulations
         Simulations spent on the check.
+    no_effect
+        Free parameters that move no output at the estimate although the FMU holds the value
+        set (a zero column of the sensitivities; the structural check names them).
 
     """
 
@@ -58,6 +65,7 @@ class Health:
     jumps: dict[str, int] = field(default_factory=dict)
     diff_step: float = PROBE_STEP
     simulations: int = 0
+    no_effect: tuple[str, ...] = ()
 
     @property
     def smooth(self) -> bool:
@@ -78,6 +86,7 @@ class Health:
             "jumps": dict(self.jumps),
             "diff_step": self.diff_step,
             "simulations": self.simulations,
+            "no_effect": list(self.no_effect),
         }
 
 
@@ -99,8 +108,15 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
     Health
         With ``diff_step`` raised above the noise floor where the residuals are noisy.
 
+    Raises
+    ------
+    FmuError
+        When a free parameter moves no output and the FMU does not hold the value set (it
+        ignored it; see :func:`ignored_parameters`).
+
     """
     sims0 = problem.simulations
+    no_effect = ignored_parameters(problem, z_hat, jacobian)
     fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
     r0 = safe_residuals(problem, z_hat)
     deterministic = bool(np.array_equal(r0, safe_residuals(problem, z_hat)))
@@ -132,7 +148,61 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
         jumps=jumps,
         diff_step=float(min(max(steps), MAX_DIFF_STEP)),
         simulations=problem.simulations - sims0,
+        no_effect=no_effect,
     )
+
+
+def ignored_parameters(
+    problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray
+) -> tuple[str, ...]:
+    """Check that every free parameter with a zero sensitivity column is held by the FMU.
+
+    A zero column means the parameter moves no output. When the FMU gives back the value set,
+    the model does not use the parameter here (a structural finding); when it gives back
+    another value or none, the FMU ignored what fmuid set (as 20-sim's FMUs do with a value set
+    before ``fmi2SetupExperiment``), and every answer about that parameter would be wrong.
+
+    Returns
+    -------
+    tuple of str
+        The free parameters that move no output although the FMU holds their values.
+
+    Raises
+    ------
+    FmuError
+        Naming the parameters the FMU ignored, the value set and the value it holds.
+
+    """
+    dead = tuple(name for i, name in enumerate(problem.names) if not np.any(jacobian[:, i]))
+    predictor = problem.predictor
+    if not dead or not isinstance(predictor, FmuPredictor):
+        return dead
+    values = {**predictor.fixed, **problem.from_z(z_hat)}
+    model = predictor.model
+    try:
+        held = held_parameters(model, values)
+    except FmuError as exc:
+        raise FmuError(
+            f"FMU {model.model_name}: {', '.join(dead)} move(s) no output, and reading the "
+            f"value back failed ({exc}), so the FMU probably ignored what fmuid set",
+            function=exc.function,
+            status=exc.status,
+        ) from exc
+    ignored = [n for n in dead if not np.isclose(held[n], float(values[n]), rtol=1e-9, atol=0.0)]
+    if ignored:
+        said = ", ".join(f"{n} set to {float(values[n]):.6g} holds {held[n]:.6g}" for n in ignored)
+        raise FmuError(
+            f"FMU {model.model_name} ignored the parameter(s) {', '.join(ignored)}: they move "
+            f"no output, and after initialization the FMU holds another value than fmuid set "
+            f"({said}); it may re-apply its start values after they are set, or not read them "
+            "from the master at all; fix the FMU's export (or fix these parameters in the spec)",
+            function="fmi3SetFloat64" if model.fmi_version == "3.0" else "fmi2SetReal",
+        )
+    log.warning(
+        "%s move(s) no output of FMU %s at the estimate (a zero sensitivity column)",
+        ", ".join(dead), model.model_name,
+    )  # fmt: skip
+    return dead
 
 
 def _moved(z: np.ndarray, i: int, dz: float) -> np.ndarray:

@@ -63,6 +63,10 @@ def label(
         ``practically_non_identifiable``.
 
     """
+    if flat and null_partners is not None and not null_partners:
+        return STRUCTURALLY_NON_IDENTIFIABLE, (
+            f"the profile is flat and {meaning or name + ' has no effect on the outputs'}"
+        )
     if flat and null_partners is not None:
         return STRUCTURALLY_NON_IDENTIFIABLE, (
             f"the profile is flat and the noise-free sensitivities have a null direction "
@@ -74,6 +78,8 @@ def label(
         "the noise-free sensitivities have full rank, so the data, not the model, leave it open"
         if null_partners is None
         else f"{name} is in a null direction of the sensitivities with {', '.join(null_partners)}"
+        if null_partners
+        else f"{name} moves no output at the estimate"
     )
     if flat:
         return PRACTICALLY_NON_IDENTIFIABLE, f"the profile is flat within the bounds; {rank}"
