@@ -55,6 +55,8 @@ class Instance:
         self.v3 = model.fmi_version == "3.0"
         self.prefix = "fmi3" if self.v3 else "fmi2"
         self.messages: list[str] = []
+        self.said: set[str] = set()
+        """Topics of warnings already logged for this instance (each is said once)."""
         classes = {(False, True): FMU2Slave, (False, False): FMU2Model,
                    (True, True): FMU3Slave, (True, False): FMU3Model}  # fmt: skip
         cls = classes[(self.v3, model.is_cosimulation)]
