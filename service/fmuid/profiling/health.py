@@ -29,6 +29,9 @@ GRID_SPAN = 2e-3
 SIGNAL_TO_NOISE = 1e3
 #: Largest finite-difference step (relative, fitted coordinates).
 MAX_DIFF_STEP = 1e-2
+#: Jumps of chi2 (here or along a walked profile) of this fraction of the pointwise threshold
+#: limit the intervals: the label says by how much the jumps could move the ends.
+NOISY_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,9 @@ class Health:
         Per parameter: points of a grid along the parameter alone (steps of half its
         conditional standard deviation, at most ``GRID_SPAN`` of its range) where chi2 departs
         from a smooth (quartic) curve.
+    chi2_noise
+        Per parameter: the largest departure of chi2 on that grid from the smooth curve, in
+        chi2 units (the jumps' size; a smooth FMU's is round-off).
     diff_step
         The finite-difference step chosen for the re-fits (relative, fitted coordinates).
     simulations
@@ -63,6 +69,7 @@ class Health:
     reset_matches_fresh: bool | None
     noise_floor: dict[str, float] = field(default_factory=dict)
     jumps: dict[str, int] = field(default_factory=dict)
+    chi2_noise: dict[str, float] = field(default_factory=dict)
     diff_step: float = PROBE_STEP
     simulations: int = 0
     no_effect: tuple[str, ...] = ()
@@ -76,6 +83,11 @@ class Health:
         """
         return self.deterministic and not any(self.jumps.values()) and self.diff_step <= PROBE_STEP
 
+    @property
+    def noise_floor_chi2(self) -> float:
+        """The largest jump of chi2 along any one parameter (chi2 units)."""
+        return max(self.chi2_noise.values(), default=0.0)
+
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the check."""
         return {
@@ -84,6 +96,8 @@ class Health:
             "reset_matches_fresh": self.reset_matches_fresh,
             "noise_floor": dict(self.noise_floor),
             "jumps": dict(self.jumps),
+            "chi2_noise": dict(self.chi2_noise),
+            "noise_floor_chi2": self.noise_floor_chi2,
             "diff_step": self.diff_step,
             "simulations": self.simulations,
             "no_effect": list(self.no_effect),
@@ -122,6 +136,7 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
     deterministic = bool(np.array_equal(r0, safe_residuals(problem, z_hat)))
     noise: dict[str, float] = {}
     jumps: dict[str, int] = {}
+    chi2_noise: dict[str, float] = {}
     steps = [PROBE_STEP]
     lo, hi = problem.z_lower, problem.z_upper
     for i, name in enumerate(problem.names):
@@ -140,12 +155,13 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
         chi2 = np.array(
             [float(r0 @ r0) if g == z_hat[i] else _chi2(problem, _at(z_hat, i, g)) for g in grid]
         )
-        jumps[name] = _departures(grid, chi2)
+        jumps[name], chi2_noise[name] = _departures(grid, chi2)
     return Health(
         deterministic=deterministic,
         reset_matches_fresh=fresh,
         noise_floor=noise,
         jumps=jumps,
+        chi2_noise=chi2_noise,
         diff_step=float(min(max(steps), MAX_DIFF_STEP)),
         simulations=problem.simulations - sims0,
         no_effect=no_effect,
@@ -222,14 +238,17 @@ def _chi2(problem: Problem, z: np.ndarray) -> float:
     return float(r @ r)
 
 
-def _departures(grid: np.ndarray, chi2: np.ndarray) -> int:
-    """Points where chi2 departs from a least-squares quartic by 1 % of its range."""
+def _departures(grid: np.ndarray, chi2: np.ndarray) -> tuple[int, float]:
+    """Count the points off a least-squares quartic by 1 % of chi2's range; the largest offset.
+
+    The offset is in chi2 units.
+    """
     if grid.size < 7 or not np.all(np.isfinite(chi2)):
-        return 0
+        return 0, 0.0
     x = (grid - grid.mean()) / (np.ptp(grid) or 1.0)
-    fit = np.polyval(np.polyfit(x, chi2, 4), x)
+    off = np.abs(chi2 - np.polyval(np.polyfit(x, chi2, 4), x))
     spread = max(float(np.ptp(chi2)), 1e-9 * max(1.0, float(np.max(np.abs(chi2)))))
-    return int(np.sum(np.abs(chi2 - fit) > 0.01 * spread))
+    return int(np.sum(off > 0.01 * spread)), float(np.max(off))
 
 
 def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
