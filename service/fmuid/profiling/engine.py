@@ -99,7 +99,9 @@ def profile_problem(
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
-    health = check_health(problem, fit.z_estimate(), fit.jacobian)
+    health = check_health(
+        problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
+    )
     sims += health.simulations
     if not health.smooth:
         log.info("the objective is not smooth (%s): thorough checks", health.to_dict())

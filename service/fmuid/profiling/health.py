@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -15,6 +16,7 @@ from fmuid.estimation.problem import Problem
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.model.simulator import Simulator
 from fmuid.model.smoke import held_parameters
+from fmuid.progress import Progress, ProgressCallback
 
 log = logging.getLogger(__name__)
 
@@ -104,7 +106,43 @@ class Health:
         }
 
 
-def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> Health:
+class _Meter:
+    """Evaluates the residuals, counts the evaluations and says how long the rest will take."""
+
+    def __init__(self, problem: Problem, total: int, progress: ProgressCallback | None) -> None:
+        self.problem, self.total, self.progress = problem, total, progress
+        self.done = 0
+        self.seconds = 0.0
+
+    def __call__(self, z: np.ndarray) -> np.ndarray:
+        t0 = time.perf_counter()
+        r = safe_residuals(self.problem, z)
+        self.seconds += time.perf_counter() - t0
+        self.done += 1
+        per_run = self.seconds / self.done
+        if self.done == 1:
+            log.info(
+                "health check: %d runs of the %d experiment(s) at %.3g s each, about %.0f s "
+                "(shorten it with CheckOptions.health_grid)",
+                self.total, len(self.problem.experiments), per_run, per_run * self.total,
+            )  # fmt: skip
+        if self.progress is not None:
+            left = per_run * max(self.total - self.done, 0)
+            self.progress(
+                Progress(
+                    "health", self.done, self.total, f"{per_run:.3g} s per run, {left:.0f} s left"
+                )
+            )
+        return r
+
+
+def check_health(
+    problem: Problem,
+    z_hat: np.ndarray,
+    jacobian: np.ndarray,
+    progress: ProgressCallback | None = None,
+    grid_side: int = GRID_SIDE,
+) -> Health:
     """Probe the objective around the estimate.
 
     Parameters
@@ -116,6 +154,13 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
     jacobian
         Weighted residual Jacobian at the estimate (fitted coordinates); its column norms set
         the grid steps.
+    progress
+        Receives ``Progress("health", done, total, detail)`` after each run of the experiments
+        (the detail says the measured cost per run and the time left); the first run's cost
+        and the number of runs are also logged.
+    grid_side
+        Grid points on each side of the estimate along each parameter (``GRID_SIDE``; fewer
+        make a shorter check for slow FMUs; below 3 no jumps are looked for).
 
     Returns
     -------
@@ -132,8 +177,9 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
     sims0 = problem.simulations
     no_effect = ignored_parameters(problem, z_hat, jacobian)
     fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
-    r0 = safe_residuals(problem, z_hat)
-    deterministic = bool(np.array_equal(r0, safe_residuals(problem, z_hat)))
+    residuals = _Meter(problem, 2 + len(problem.names) * (4 + 2 * grid_side), progress)
+    r0 = residuals(z_hat)
+    deterministic = bool(np.array_equal(r0, residuals(z_hat)))
     noise: dict[str, float] = {}
     jumps: dict[str, int] = {}
     chi2_noise: dict[str, float] = {}
@@ -142,7 +188,7 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
     for i, name in enumerate(problem.names):
         scale = max(1.0, abs(float(z_hat[i])))
         h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
-        rows = [r0] + [safe_residuals(problem, _moved(z_hat, i, k * h)) for k in range(1, 5)]
+        rows = [r0] + [residuals(_moved(z_hat, i, k * h)) for k in range(1, 5)]
         fourth = rows[0] - 4 * rows[1] + 6 * rows[2] - 4 * rows[3] + rows[4]
         noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
         slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
@@ -150,11 +196,10 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
             steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
         norm = float(np.linalg.norm(jacobian[:, i]))
         d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
-        grid = np.clip(z_hat[i] + d * np.arange(-GRID_SIDE, GRID_SIDE + 1), lo[i], hi[i])
+        grid = np.clip(z_hat[i] + d * np.arange(-grid_side, grid_side + 1), lo[i], hi[i])
         grid = np.unique(grid)
-        chi2 = np.array(
-            [float(r0 @ r0) if g == z_hat[i] else _chi2(problem, _at(z_hat, i, g)) for g in grid]
-        )
+        rows = [r0 if g == z_hat[i] else residuals(_at(z_hat, i, g)) for g in grid]
+        chi2 = np.array([float(r @ r) for r in rows])
         jumps[name], chi2_noise[name] = _departures(grid, chi2)
     return Health(
         deterministic=deterministic,
@@ -233,17 +278,12 @@ def _at(z: np.ndarray, i: int, zi: float) -> np.ndarray:
     return out
 
 
-def _chi2(problem: Problem, z: np.ndarray) -> float:
-    r = safe_residuals(problem, z)
-    return float(r @ r)
-
-
 def _departures(grid: np.ndarray, chi2: np.ndarray) -> tuple[int, float]:
     """Count the points off a least-squares quartic by 1 % of chi2's range; the largest offset.
 
     The offset is in chi2 units.
     """
-    if grid.size < 7 or not np.all(np.isfinite(chi2)):
+    if grid.size < 7 or not np.all(np.isfinite(chi2)):  # a quartic needs more than five points
         return 0, 0.0
     x = (grid - grid.mean()) / (np.ptp(grid) or 1.0)
     off = np.abs(chi2 - np.polyval(np.polyfit(x, chi2, 4), x))
