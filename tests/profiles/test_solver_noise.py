@@ -15,7 +15,9 @@ from tests.model.quirks import build_quirk_fmu
 import fmuid
 from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.model.simulator import Simulator
-from fmuid.profiling.intervals import NOISE_PREFIX
+from fmuid.profiling.ends import bracket
+from fmuid.profiling.intervals import NOISE_PREFIX, profile_noise
+from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import IDENTIFIABLE, PRACTICALLY_NON_IDENTIFIABLE
 
 SIGMA = 0.02
@@ -98,3 +100,16 @@ def test_jagged_profile_reports_the_outermost_crossing_and_the_noise(jitter_fmu:
             assert side * (end - first) >= -2 * grid
             shift = noise / (2.0 * threshold) * abs(end - tau.estimate)
             assert abs(end - reach) <= shift + 2 * grid
+
+
+def test_outermost_bracket_and_profile_noise_on_a_stepped_parabola() -> None:
+    z = np.linspace(0.0, 2.0, 21)
+    chi2 = 10.0 + z**2 - 0.6 * ((z > 1.05) & (z < 1.35))  # under a rise of 1 at 1.1 and 1.2
+    side = [WalkPoint(np.array([x]), c) for x, c in zip(z, chi2, strict=True)]
+    first, last = bracket(side, 0, 10.0, 1.0), bracket(side, 0, 10.0, 1.0, outermost=True)
+    assert first is not None and last is not None
+    assert float(first[1].z[0]) == pytest.approx(1.0)
+    assert float(last[0].z[0]) == pytest.approx(1.2) and float(last[1].z[0]) == pytest.approx(1.3)
+    assert profile_noise(z, 10.0 + z**2, 10.0) < 1e-12
+    one = 10.0 + z**2 - 0.6 * np.isclose(z, 1.1)  # a single point off: exactly its jump
+    assert profile_noise(z, one, 10.0) == pytest.approx(0.6, rel=1e-9)
