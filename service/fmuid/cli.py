@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -27,7 +28,7 @@ EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 _DESCRIPTION = (
     "Which FMU parameters can your measurements pin down, and why do model and data disagree? "
     "Fit, profile likelihoods and diagnosis of FMI 2.0/3.0 FMUs; built-in models: "
-    "tractor_implement, msd, msd_parallel."
+    "tractor_implement, msd, msd_parallel, emps."
 )
 
 
@@ -53,7 +54,24 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any, Any]:
     if args.interface:
         spec = spec.model_copy(update={"interface": args.interface})
     spec = apply_start(spec, args.start)
+    if args.settle is not None:
+        spec = spec.model_copy(update={"settle": args.settle})
     return fmu, experiments, spec, make_problem(fmu, experiments, spec)
+
+
+def _test_data(args: argparse.Namespace) -> list[Any]:
+    """Return the held-out experiments of ``--test-data``."""
+    from fmuid.data import load_experiment
+
+    return [load_experiment(p) for p in args.test_data]
+
+
+def _seconds(text: str) -> float:
+    """Parse a non-negative finite number of seconds (``--settle``)."""
+    value = float(text)
+    if not (value >= 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, not {text}")
+    return value
 
 
 def _fmu_path(text: str) -> Path:
@@ -150,8 +168,11 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     import fmuid
 
     fmu, experiments, spec, problem = _load_inputs(args)
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
-        result = fmuid.fit(fmu, experiments, spec, progress=progress, problem=problem)
+        result = fmuid.fit(
+            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -163,10 +184,12 @@ def _cmd_profile(args: argparse.Namespace) -> int:
     import fmuid
 
     fmu, experiments, spec, problem = _load_inputs(args)
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
         result = fmuid.profile(
-            fmu, experiments, spec, workers=args.workers, progress=progress, problem=problem
-        )
+            fmu, experiments, spec, workers=args.workers, progress=progress, problem=problem,
+            test_data=tests,
+        )  # fmt: skip
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -178,8 +201,11 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.discrepancy import diagnose
 
     fmu, experiments, spec, problem = _load_inputs(args)
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
-        result = diagnose(fmu, experiments, spec, progress=progress, problem=problem)
+        result = diagnose(
+            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -280,6 +306,14 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--out", required=True, help="result JSON")
         p.add_argument("--report", help="write index.html and plots into this folder")
         p.add_argument("--start", help="SSP parameter-value file (.ssv): start values")
+        p.add_argument(
+            "--test-data", action="append", default=[],
+            help="held-out CSV file (repeatable): the fitted model's simulation error on it",
+        )  # fmt: skip
+        p.add_argument(
+            "--settle", type=_seconds,
+            help="settle-in window [s] left out of the likelihood (default: the spec's settle)",
+        )  # fmt: skip
         _interface_option(p)
         if name == "profile":
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")

@@ -3,19 +3,21 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from fmuid.data import Experiment, Spec
+from fmuid.data.checks import check_test_data
 from fmuid.errors import DataError, FmuError, SpecError
 from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
 from fmuid.estimation.study import make_problem
+from fmuid.estimation.validation import held_out_rms
 from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel
@@ -141,6 +143,7 @@ def fit(
     *,
     progress: ProgressCallback | None = None,
     problem: Problem | None = None,
+    test_data: Sequence[Experiment] = (),
 ) -> FitResult:
     """Fit the spec's free parameters of an FMU to one or more experiments.
 
@@ -161,11 +164,19 @@ def fit(
     problem
         The problem :func:`make_problem` built of these inputs, to hand on one already built
         (e.g. the one the report then draws from); default: built here.
+    test_data
+        Held-out experiments: the fitted model is simulated on them and the RMS of its
+        simulation error per file and output goes into ``validation``.
 
     Returns
     -------
     FitResult
         Estimates, chi2 and cost; ``.to_dict()`` gives the JSON of ``fmuid fit``.
+
+    Raises
+    ------
+    DataError, SpecError
+        When a test file does not fit the FMU and spec (checked before the fit).
 
     Examples
     --------
@@ -174,7 +185,11 @@ def fit(
 
     """
     problem = problem or make_problem(fmu, experiments, spec)
-    return fit_problem(problem, global_search=spec.global_search, seed=spec.seed, progress=progress)
+    _check_test_data(problem, test_data)
+    result = fit_problem(
+        problem, global_search=spec.global_search, seed=spec.seed, progress=progress
+    )
+    return _validated(problem, result, test_data)
 
 
 def profile(
@@ -187,6 +202,7 @@ def profile(
     executor: Any = None,
     progress: ProgressCallback | None = None,
     problem: Problem | None = None,
+    test_data: Sequence[Experiment] = (),
 ) -> ProfileResult:
     """Fit, then profile the likelihood of every free parameter.
 
@@ -202,8 +218,8 @@ def profile(
         A ``dask.distributed.Client``: branches run as tasks on its workers.
     progress
         Receives ``fmuid.progress.Progress`` events, one per profile point.
-    problem
-        As for :func:`fit`.
+    problem, test_data
+        As for :func:`fit` (``validation`` is computed at the profile's best fit).
 
     Returns
     -------
@@ -212,8 +228,29 @@ def profile(
 
     """
     problem = problem or make_problem(fmu, experiments, spec)
+    _check_test_data(problem, test_data)
     if fit is None:
         fit = fit_problem(
             problem, global_search=spec.global_search, seed=spec.seed, progress=progress
         )
-    return profile_problem(problem, fit, workers=workers, executor=executor, progress=progress)
+    result = profile_problem(problem, fit, workers=workers, executor=executor, progress=progress)
+    if not test_data:
+        return result
+    return replace(result, fit=_validated(problem, result.fit, test_data))
+
+
+def _check_test_data(problem: Problem, test_data: Sequence[Experiment]) -> None:
+    """Check held-out experiments against the problem's FMU and spec, as its data were."""
+    if test_data:
+        model = problem.model
+        check_test_data(problem.spec, model.parameters, model.inputs, model.outputs, test_data)
+
+
+def _validated(problem: Problem, fit: FitResult, test_data: Sequence[Experiment]) -> FitResult:
+    """Return ``fit`` with the held-out error of its estimates on ``test_data``."""
+    if not test_data:
+        return fit
+    entries = held_out_rms(
+        problem.predictor, fit.estimates, test_data, problem.outputs, problem.spec.settle
+    )
+    return replace(fit, validation=tuple(entries))

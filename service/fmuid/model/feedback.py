@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fmuid.errors import FmuError
 from fmuid.model.channels import Channels
 from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan
@@ -166,8 +167,17 @@ def run_feedback(
         level = np.array(src, dtype=float)
         rate = (level - previous) / (t - t_prev) if k else np.zeros_like(level)
         g = np.zeros(n_in)
-        for i, j, term in terms:
-            g[i] += term.value(float(rate[j] if term.derivative else level[j]))
+        try:
+            for i, j, term in terms:
+                g[i] += term.value(float(rate[j] if term.derivative else level[j]))
+        except OverflowError:
+            g[:] = np.inf
+        if not np.all(np.isfinite(g)):
+            raise FmuError(
+                f"the loop closed around the FMU by the feedback terms diverged at t = {t} s "
+                "(outputs or fed-back terms beyond the float range)",
+                function="feedback",
+            )
         fill((values[k] + g).tolist())
         if (status := set_inputs()) > 1:  # fmi2SetReal & co.
             raise instance.fail(set_name, status, f"for the inputs at t = {t} s")

@@ -198,6 +198,7 @@ class ProfileResult:
             "checks": self.checks,
             "cost": self.cost.to_dict(),
             "units": dict(self.fit.units),
+            **self.fit.validation_dict(),
         }
 
     def to_frame(self) -> Any:
