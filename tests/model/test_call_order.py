@@ -1,5 +1,6 @@
 """The FMI call order: parameters are set after ``fmi2SetupExperiment`` (20-sim re-applies its
-start values there), checked on a test FMU with that quirk against scipy."""
+start values there), checked on a test FMU with that quirk against scipy; ``fmuid info`` names
+the parameters of an FMU that ignores them whatever the order."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from tests.model.quirks import build_quirk_fmu
 
+from fmuid.model.info import info
 from fmuid.model.simulator import Simulator
 
 PARAMS = {"R1": 2.0, "R2": 0.5, "C1": 0.7, "C2": 1.5}
@@ -48,3 +50,11 @@ def test_parameters_survive_setup_experiment(setup_resets_fmu: Path) -> None:
     assert np.max(np.abs(expected - at_start)) > 0.1  # the quirk would be seen
     for run in runs:  # a fresh instance and one after fmi2Reset
         np.testing.assert_allclose(run, expected, atol=1e-7)
+
+
+def test_info_names_parameters_the_fmu_ignores(setup_resets_fmu: Path, tmp_path: Path) -> None:
+    assert info(setup_resets_fmu).health.ignored == ()  # held: set after fmi2SetupExperiment
+    deaf = build_quirk_fmu("setup_resets", tmp_path, layer="initialization_resets.c")
+    health = info(deaf).health
+    assert health.simulates and health.ignored == ("R1", "R2", "C1", "C2")
+    assert health.message.startswith("the FMU ignores the parameter(s) R1, R2, C1, C2")

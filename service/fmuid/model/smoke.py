@@ -47,6 +47,9 @@ class ModelHealth:
         Start and stop time of the runs [s].
     message
         What went wrong, or ``""``.
+    ignored
+        Float parameters the FMU does not hold after initialization when set (each moved by
+        1 % from its start value) the way runs set them: it would ignore fmuid's values.
 
     """
 
@@ -55,6 +58,7 @@ class ModelHealth:
     reset_reliable: bool | None
     horizon_s: tuple[float, float]
     message: str
+    ignored: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form."""
@@ -87,7 +91,29 @@ def model_health(model: FmuModel, stop: float | None) -> ModelHealth:
     finite = all(bool(np.all(np.isfinite(r))) for r in runs)
     same = bool(np.array_equal(runs[0], runs[1], equal_nan=True))
     message = "" if finite else "non-finite outputs at the start values"
-    return ModelHealth(finite, same, simulator.reset_reliable, horizon, message)
+    ignored = _ignored(model)
+    if ignored:
+        message = (
+            f"the FMU ignores the parameter(s) {', '.join(ignored)}: set before initialization "
+            "as fmuid sets them, it holds other values after it; fits of them would be void"
+        )
+    return ModelHealth(finite, same, simulator.reset_reliable, horizon, message, ignored)
+
+
+def _ignored(model: FmuModel) -> tuple[str, ...]:
+    """Float parameters whose value moved by 1 % is not held after initialization."""
+    moved = {
+        name: float(v.start) + max(abs(float(v.start)) * 0.01, 1e-3)
+        for name, v in model.parameters.items()
+        if v.kind == "float" and isinstance(v.start, int | float)
+    }
+    if not moved:
+        return ()
+    try:
+        held = held_parameters(model, moved)
+    except FmuError:  # moved values the FMU refuses: no verdict
+        return ()
+    return tuple(n for n, x in moved.items() if not np.isclose(held[n], x, rtol=1e-9, atol=0.0))
 
 
 def held_parameters(model: FmuModel, values: Mapping[str, float | str]) -> dict[str, float]:
