@@ -4,7 +4,7 @@ For each benchmark of ``../shared/real`` (converted by ``examples/real/convert.p
 built-in textbook FMU is diagnosed on the estimation record with the official test records
 held out, and a table is printed::
 
-    benchmark | samples | test set | output | textbook RMS | after diagnosis | published | effects | s
+    benchmark | samples | test set | output | textbook RMS | after | published | effects | s
 
 Usage::
 
