@@ -82,7 +82,7 @@ def test_sigint_stops_a_two_worker_profile_and_its_workers(tractor_fmu, tmp_path
 @pytest.mark.slow
 def test_a_script_without_main_guard_runs_once(msd_parallel_fmu, tmp_path):
     (tmp_path / "d.csv").write_text(
-        "time,f,x\n" + "".join(f"{t / 4},40,{10 * (1 - 0.9 ** t):.6f}\n" for t in range(25))
+        "time,f,x\n" + "".join(f"{t / 4},40,{10 * (1 - 0.9**t):.6f}\n" for t in range(25))
     )
     spec = {
         "parameters": {
