@@ -1,9 +1,11 @@
+import html
 import re
 from html.parser import HTMLParser
 
 import pytest
 
 from fmuid.demo import NOMINAL, run_demo
+from report.test_report_text import unreadable
 
 
 class _Images(HTMLParser):
@@ -42,4 +44,7 @@ def test_small_grid_demo_writes_the_study_report(tmp_path):
         low, high = (float(v) for v in rows[name][6].strip("[]").split(", "))
         assert low < NOMINAL[name] < high
     assert "Experiment advice" in text
+    assert unreadable(html.unescape(re.sub(r"<[^>]+>", " ", text.split("<body>")[1]))) == []
+    assert "seed 0" in text and "sigma = max|gam_t| / SNR" in text
+    assert any(line.startswith("drawing the per-dataset reports: 4/4") for line in lines)
     assert len(list((tmp_path / "demo").glob("*/index.html"))) == 4

@@ -58,6 +58,6 @@ def duration(seconds: float) -> str:
     """Return a duration with three significant digits: ``8.08 s``, ``413 s``, ``2.5 h``."""
     if seconds < 100:
         return f"{seconds:.3g} s"
-    if seconds < 10_000:
+    if seconds < 6000:
         return f"{seconds:.0f} s"
     return f"{seconds / 3600:.3g} h"
