@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from fmuid import provenance
 from fmuid.data import Experiment, Spec
 from fmuid.errors import DataError, FmuError, SpecError
 from fmuid.estimation.optimize import fit_problem
@@ -173,8 +174,16 @@ def fit(
     >>> result = fmuid.fit("fmus/msd.fmu", [load_experiment("step.csv")], load_spec("spec.json"))
 
     """
+    started = provenance.now()
     problem = problem or make_problem(fmu, experiments, spec)
-    return fit_problem(problem, global_search=spec.global_search, seed=spec.seed, progress=progress)
+    result = fit_problem(
+        problem, global_search=spec.global_search, seed=spec.seed, progress=progress
+    )
+    options = {"stage": "fit", "global_search": spec.global_search, "interface": spec.interface}
+    return provenance.record(
+        result, fmu_sha256=problem.model.sha256, spec=spec, experiments=experiments,
+        options=options, started=started,
+    )  # fmt: skip
 
 
 def profile(
@@ -211,9 +220,20 @@ def profile(
         Intervals, labels, profiles and structural check; ``.to_dict()`` gives the contract JSON.
 
     """
+    started = provenance.now()
     problem = problem or make_problem(fmu, experiments, spec)
+    options = {
+        "stage": "profile", "global_search": spec.global_search, "interface": spec.interface,
+        "confidence": spec.confidence, "workers": workers,
+        "executor": None if executor is None else type(executor).__name__,
+        "fit": "given" if fit is not None else "fitted here",
+    }  # fmt: skip
     if fit is None:
         fit = fit_problem(
             problem, global_search=spec.global_search, seed=spec.seed, progress=progress
         )
-    return profile_problem(problem, fit, workers=workers, executor=executor, progress=progress)
+    result = profile_problem(problem, fit, workers=workers, executor=executor, progress=progress)
+    return provenance.record(
+        result, fmu_sha256=problem.model.sha256, spec=spec, experiments=experiments,
+        options=options, started=started,
+    )  # fmt: skip

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from fmuid.estimation.space import ParameterSpace
+from fmuid.provenance import Provenance, entry
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,7 @@ class FitResult:
     cost: Cost = Cost(0, 0.0)
     fmu_info: dict[str, str] = field(default_factory=dict)
     units: dict[str, str] = field(default_factory=dict)
+    provenance: Provenance | None = None
 
     @property
     def space(self) -> ParameterSpace:
@@ -135,6 +137,7 @@ class FitResult:
             "message": self.message,
             "cost": self.cost.to_dict(),
             "units": dict(self.units),
+            **entry(self.provenance),
         }
 
     def to_frame(self) -> Any:
