@@ -23,7 +23,7 @@ from fmuid.model.fmu import USABLE, FmuModel
 from fmuid.model.registry import get_simulator
 from fmuid.profiling.engine import profile_problem
 from fmuid.profiling.result import ProfileResult
-from fmuid.progress import ProgressCallback
+from fmuid.progress import ProgressCallback, default_progress
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,8 @@ def fit(
     spec
         The study (``fmuid.data.load_spec``).
     progress
-        Receives ``fmuid.progress.Progress`` events.
+        Receives ``fmuid.progress.Progress`` events (default: bars under the cell in a
+        Jupyter notebook, nothing elsewhere).
     problem
         The problem :func:`make_problem` built of these inputs, to hand on one already built
         (e.g. the one the report then draws from); default: built here.
@@ -175,6 +176,7 @@ def fit(
 
     """
     started = provenance.now()
+    progress = default_progress(progress)
     problem = problem or make_problem(fmu, experiments, spec)
     result = fit_problem(
         problem, global_search=spec.global_search, seed=spec.seed, progress=progress
@@ -210,7 +212,8 @@ def profile(
     executor
         A ``dask.distributed.Client``: branches run as tasks on its workers.
     progress
-        Receives ``fmuid.progress.Progress`` events, one per profile point.
+        Receives ``fmuid.progress.Progress`` events, one per profile point (default: bars
+        under the cell in a Jupyter notebook, nothing elsewhere).
     problem
         As for :func:`fit`.
 
@@ -221,6 +224,7 @@ def profile(
 
     """
     started = provenance.now()
+    progress = default_progress(progress)
     problem = problem or make_problem(fmu, experiments, spec)
     options = {
         "stage": "profile", "global_search": spec.global_search, "interface": spec.interface,

@@ -35,7 +35,7 @@ from fmuid.experiment_design.verify import Draw, DrawTask, combine
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel
 from fmuid.profiling.engine import thresholds
-from fmuid.progress import Progress, ProgressCallback
+from fmuid.progress import Progress, ProgressCallback, default_progress
 
 log = logging.getLogger(__name__)
 
@@ -130,6 +130,7 @@ def design(
     """
     t0 = time.perf_counter()
     started = provenance.now()
+    progress = default_progress(progress)
     model = FmuModel(resolve_fmu(fmu))
     check_design(space, spec, model)
     n_verify = space.verify_designs if verify_designs is None else verify_designs
