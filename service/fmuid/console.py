@@ -16,15 +16,16 @@ from types import FrameType, TracebackType
 from typing import TYPE_CHECKING, Any
 
 from fmuid.progress import Progress
+from fmuid.report.text import OPEN
 
 if TYPE_CHECKING:
+    from fmuid.estimation.result import FitResult
     from fmuid.model.info import ModelInfo, VariableInfo
     from fmuid.profiling.result import ProfileResult
 
 log = logging.getLogger("fmuid")
 
 EXIT_INTERRUPTED = 130
-OPEN = "open"
 
 
 class ProgressDisplay:
@@ -123,6 +124,24 @@ def table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     ]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
+
+
+def fit_table(result: FitResult) -> str:
+    """Format a fit as a table: estimate, unit, bounds (and which estimates lie on one)."""
+    on_bound = {n for n, p in result.to_dict()["parameters"].items() if p["at_bound"]}
+    rows = [
+        [
+            name,
+            _number(result.estimates[name]),
+            result.units.get(name, ""),
+            f"[{_number(result.lower[name])}, {_number(result.upper[name])}]",
+            *(["yes" if name in on_bound else "no"] if on_bound else []),
+        ]
+        for name in result.names
+    ]
+    header = ["parameter", "estimate", "unit", "bounds", *(["on a bound"] if on_bound else [])]
+    text = table(header, rows)
+    return f"{text}\nchi2 {result.chi2:.6g} with {result.n_data} data points"
 
 
 def profile_table(result: ProfileResult) -> str:

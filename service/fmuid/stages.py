@@ -5,25 +5,32 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fmuid import provenance
 from fmuid.data import Experiment, Spec
 from fmuid.errors import DataError, FmuError, SpecError
-from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.predictor import merged_inputs
-from fmuid.estimation.problem import Problem
-from fmuid.estimation.result import FitResult
-from fmuid.estimation.study import make_problem
 from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel
 from fmuid.model.registry import get_simulator
-from fmuid.profiling.engine import profile_problem
-from fmuid.profiling.result import ProfileResult
 from fmuid.progress import ProgressCallback, default_progress
+
+if TYPE_CHECKING:  # the fit and profile machinery is imported on first use: simulate starts fast
+    from fmuid.estimation.problem import Problem
+    from fmuid.estimation.result import FitResult
+    from fmuid.profiling.result import ProfileResult
+
+
+def __getattr__(name: str) -> Any:
+    if name != "make_problem":
+        raise AttributeError(f"module 'fmuid.stages' has no attribute {name!r}")
+    from fmuid.estimation.study import make_problem
+
+    return make_problem
 
 
 @dataclass(frozen=True)
@@ -51,6 +58,18 @@ class Simulation:
     outputs: dict[str, np.ndarray]
     model: FmuModel
     input_handling: str
+
+    def to_frame(self) -> Any:
+        """Return a pandas table indexed by ``time`` [s]: inputs, then outputs (needs pandas).
+
+        The columns are what ``fmuid simulate --with-inputs`` writes.
+        """
+        from fmuid.frames import pandas_module
+
+        pandas = pandas_module()
+        frame = pandas.DataFrame({**self.inputs, **self.outputs}, index=self.time)
+        frame.index.name = "time"
+        return frame
 
 
 def simulate(
@@ -177,6 +196,9 @@ def fit(
     """
     started = provenance.now()
     progress = default_progress(progress)
+    from fmuid.estimation.optimize import fit_problem
+    from fmuid.estimation.study import make_problem
+
     problem = problem or make_problem(fmu, experiments, spec)
     result = fit_problem(
         problem, global_search=spec.global_search, seed=spec.seed, progress=progress
@@ -225,6 +247,10 @@ def profile(
     """
     started = provenance.now()
     progress = default_progress(progress)
+    from fmuid.estimation.optimize import fit_problem
+    from fmuid.estimation.study import make_problem
+    from fmuid.profiling.engine import profile_problem
+
     problem = problem or make_problem(fmu, experiments, spec)
     options = {
         "stage": "profile", "global_search": spec.global_search, "interface": spec.interface,
