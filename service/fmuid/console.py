@@ -16,7 +16,7 @@ from types import FrameType, TracebackType
 from typing import TYPE_CHECKING, Any
 
 from fmuid.progress import Progress
-from fmuid.report.text import OPEN
+from fmuid.readable import OPEN
 
 if TYPE_CHECKING:
     from fmuid.estimation.result import FitResult

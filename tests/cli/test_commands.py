@@ -56,7 +56,7 @@ def test_start_from_an_earlier_fit_skips_the_global_search(study, capsys, caplog
 
 def test_simulate_loads_no_optimiser_or_plotting():
     code = (
-        "import sys, fmuid.cli, fmuid.stages, fmuid.estimation.predictor, fmuid.report.text;"
+        "import sys, fmuid.cli, fmuid.stages, fmuid.estimation.predictor, fmuid.readable;"
         "print(sorted(sys.modules))"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

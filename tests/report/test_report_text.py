@@ -16,9 +16,9 @@ from matplotlib.text import Text
 import fmuid
 from design_cases import MSD_SPEC, SMALL, space_of
 from fmuid.data import spec_from_json
+from fmuid.readable import duration, interval, p_text, p_value
 from fmuid.report import page as page_module
 from fmuid.report import write_report
-from fmuid.report.text import duration, interval, p_text, p_value
 from report.browser import CHROMIUM, chromium
 from report.test_screenshots import _study
 

@@ -21,9 +21,9 @@ from fmuid.plots import (
     trajectory_band_figure,
 )
 from fmuid.profiling.band import trajectory_band
+from fmuid.readable import duration, interval, interval_end
 from fmuid.report.advice import StudyCase, advice_tables, study_verdict
 from fmuid.report.page import HtmlPage, file_slug, with_unit
-from fmuid.report.text import duration, interval, interval_end
 from fmuid.report.writer import write_report
 
 if TYPE_CHECKING:

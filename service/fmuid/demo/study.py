@@ -32,7 +32,7 @@ from fmuid.demo.thesis import (
 from fmuid.model.builtin import builtin_fmu
 from fmuid.model.fmu import FmuModel
 from fmuid.progress import Progress
-from fmuid.report.text import duration
+from fmuid.readable import duration
 
 
 def run_demo(

@@ -46,12 +46,13 @@ class _Popen(popen_forkserver.Popen):
     def _launch(self, process_obj: Any) -> None:
         main = sys.modules["__main__"]
         if getattr(main, "__spec__", None) is not None or not hasattr(main, "__file__"):
-            super()._launch(process_obj)  # ``python -m``, a notebook: nothing is re-run
+            # ``python -m``, a notebook: nothing is re-run (typeshed lacks ``_launch``)
+            super()._launch(process_obj)  # type: ignore[misc]
             return
         # multiprocessing skips a main module whose spec names ``__main__`` (spawn.prepare)
         main.__spec__ = importlib.machinery.ModuleSpec("__main__", None)
         try:
-            super()._launch(process_obj)
+            super()._launch(process_obj)  # type: ignore[misc]
         finally:
             main.__spec__ = None
 

@@ -10,8 +10,8 @@ from pathlib import Path
 from fmuid.experiment_design.discriminate import Discrimination
 from fmuid.experiment_design.result import DesignResult
 from fmuid.plots.design import discrimination_figure, widths_figure
+from fmuid.readable import duration, interval
 from fmuid.report.page import HtmlPage, fmt
-from fmuid.report.text import duration, interval
 
 
 def discrimination_section(page: HtmlPage, result: Discrimination) -> None:

@@ -13,9 +13,9 @@ from fmuid.errors import FmuidError
 from fmuid.estimation.problem import Problem
 from fmuid.experiment_design.discriminate import discrimination_from_dict
 from fmuid.plots import diagnosis_figures
+from fmuid.readable import interval, p_text, p_value
 from fmuid.report.design import discrimination_section
 from fmuid.report.page import Cell, HtmlPage, fmt
-from fmuid.report.text import interval, p_text, p_value
 
 logger = logging.getLogger(__name__)
 

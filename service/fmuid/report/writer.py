@@ -21,9 +21,9 @@ from fmuid.plots import (
 )
 from fmuid.profiling.band import trajectory_band
 from fmuid.profiling.result import ParameterProfile, ProfileResult
+from fmuid.readable import duration, interval
 from fmuid.report.diagnosis import diagnosis_sections
 from fmuid.report.page import HtmlPage, fmt
-from fmuid.report.text import duration, interval
 from fmuid.report.verdict import profile_verdict, quality_text
 
 if TYPE_CHECKING:
