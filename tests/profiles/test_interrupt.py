@@ -80,7 +80,8 @@ def test_sigint_stops_a_two_worker_profile_and_its_workers(tractor_fmu, tmp_path
 
 
 @pytest.mark.slow
-def test_a_script_without_main_guard_runs_once(msd_parallel_fmu, tmp_path):
+@pytest.mark.parametrize("run", [["script.py"], ["-m", "script"]], ids=["file", "module"])
+def test_a_script_without_main_guard_runs_once(msd_parallel_fmu, tmp_path, run):
     (tmp_path / "d.csv").write_text(
         "time,f,x\n" + "".join(f"{t / 4},40,{10 * (1 - 0.9**t):.6f}\n" for t in range(25))
     )
@@ -97,7 +98,7 @@ def test_a_script_without_main_guard_runs_once(msd_parallel_fmu, tmp_path):
     (tmp_path / "s.json").write_text(json.dumps(spec))
     (tmp_path / "script.py").write_text(SCRIPT.format(fmu=str(msd_parallel_fmu)))
     proc = subprocess.run(
-        [sys.executable, "script.py"], cwd=tmp_path, capture_output=True, text=True, timeout=300
+        [sys.executable, *run], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.splitlines()[-1] == "finished"

@@ -44,17 +44,15 @@ class _Popen(popen_forkserver.Popen):
     """Forkserver launch that tells the worker not to import the owner's main script."""
 
     def _launch(self, process_obj: Any) -> None:
+        # multiprocessing does not import a main module whose spec names ``__main__``
+        # (spawn.prepare); a script's (``__file__``) or a ``python -m`` module's otherwise is
         main = sys.modules["__main__"]
-        if getattr(main, "__spec__", None) is not None or not hasattr(main, "__file__"):
-            # ``python -m``, a notebook: nothing is re-run (typeshed lacks ``_launch``)
-            super()._launch(process_obj)  # type: ignore[misc]
-            return
-        # multiprocessing skips a main module whose spec names ``__main__`` (spawn.prepare)
+        spec = getattr(main, "__spec__", None)
         main.__spec__ = importlib.machinery.ModuleSpec("__main__", None)
         try:
-            super()._launch(process_obj)  # type: ignore[misc]
+            super()._launch(process_obj)  # type: ignore[misc]  # typeshed lacks _launch
         finally:
-            main.__spec__ = None
+            main.__spec__ = spec
 
 
 class _Process(ForkServerProcess):
