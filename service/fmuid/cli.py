@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -28,7 +29,7 @@ EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 _DESCRIPTION = (
     "Which FMU parameters can your measurements pin down, and why do model and data disagree? "
     "Fit, profile likelihoods and diagnosis of FMI 2.0/3.0 FMUs; built-in models: "
-    "tractor_implement, msd, msd_parallel."
+    "tractor_implement, msd, msd_parallel, emps."
 )
 
 
@@ -57,6 +58,8 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any, Any]:
         spec = _start_at_result(spec, args.start)
     else:
         spec = apply_start(spec, args.start)
+    if args.settle is not None:
+        spec = spec.model_copy(update={"settle": args.settle})
     return fmu, experiments, spec, make_problem(fmu, experiments, spec)
 
 
@@ -74,6 +77,21 @@ def _start_at_result(spec: Any, path: str) -> Any:
     log.info("starting at the estimates of %s (no global search)", path)
     spec = with_start_values(spec, {n: p["estimate"] for n, p in params.items()}, path)
     return spec.model_copy(update={"global_search": False})
+
+
+def _test_data(args: argparse.Namespace) -> list[Any]:
+    """Return the held-out experiments of ``--test-data``."""
+    from fmuid.data import load_experiment
+
+    return [load_experiment(p) for p in args.test_data]
+
+
+def _seconds(text: str) -> float:
+    """Parse a non-negative finite number of seconds (``--settle``)."""
+    value = float(text)
+    if not (value >= 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, not {text}")
+    return value
 
 
 def _fmu_path(text: str) -> Path:
@@ -170,8 +188,11 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     import fmuid
 
     fmu, experiments, spec, problem = _load_inputs(args)
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
-        result = fmuid.fit(fmu, experiments, spec, progress=progress, problem=problem)
+        result = fmuid.fit(
+            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -183,10 +204,12 @@ def _cmd_profile(args: argparse.Namespace) -> int:
     import fmuid
 
     fmu, experiments, spec, problem = _load_inputs(args)
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
         result = fmuid.profile(
-            fmu, experiments, spec, workers=args.workers, progress=progress, problem=problem
-        )
+            fmu, experiments, spec, workers=args.workers, progress=progress, problem=problem,
+            test_data=tests,
+        )  # fmt: skip
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -198,8 +221,11 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.discrepancy import diagnose
 
     fmu, experiments, spec, problem = _load_inputs(args)
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
-        result = diagnose(fmu, experiments, spec, progress=progress, problem=problem)
+        result = diagnose(
+            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -304,6 +330,14 @@ def _parser() -> argparse.ArgumentParser:
             help="start values: an SSP parameter-value file (.ssv), or a fit or profile result "
             "(.json: its estimates, without the global search)",
         )
+        p.add_argument(
+            "--test-data", action="append", default=[],
+            help="held-out CSV file (repeatable): the fitted model's simulation error on it",
+        )  # fmt: skip
+        p.add_argument(
+            "--settle", type=_seconds,
+            help="settle-in window [s] left out of the likelihood (default: the spec's settle)",
+        )  # fmt: skip
         _interface_option(p)
         if name == "profile":
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -11,8 +11,10 @@ import numpy as np
 
 from fmuid import provenance
 from fmuid.data import Experiment, Spec
+from fmuid.data.checks import check_test_data
 from fmuid.errors import DataError, FmuError, SpecError
 from fmuid.estimation.predictor import merged_inputs
+from fmuid.estimation.validation import held_out_rms
 from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel
@@ -161,6 +163,7 @@ def fit(
     *,
     progress: ProgressCallback | None = None,
     problem: Problem | None = None,
+    test_data: Sequence[Experiment] = (),
 ) -> FitResult:
     """Fit the spec's free parameters of an FMU to one or more experiments.
 
@@ -182,11 +185,19 @@ def fit(
     problem
         The problem :func:`make_problem` built of these inputs, to hand on one already built
         (e.g. the one the report then draws from); default: built here.
+    test_data
+        Held-out experiments: the fitted model is simulated on them and the RMS of its
+        simulation error per file and output goes into ``validation``.
 
     Returns
     -------
     FitResult
         Estimates, chi2 and cost; ``.to_dict()`` gives the JSON of ``fmuid fit``.
+
+    Raises
+    ------
+    DataError, SpecError
+        When a test file does not fit the FMU and spec (checked before the fit).
 
     Examples
     --------
@@ -200,13 +211,17 @@ def fit(
     from fmuid.estimation.study import make_problem
 
     problem = problem or make_problem(fmu, experiments, spec)
+    _check_test_data(problem, test_data)
     result = fit_problem(
         problem, global_search=spec.global_search, seed=spec.seed, progress=progress
     )
-    options = {"stage": "fit", "global_search": spec.global_search, "interface": spec.interface}
+    options = {
+        "stage": "fit", "global_search": spec.global_search, "interface": spec.interface,
+        "test_data": [e.name for e in test_data],
+    }  # fmt: skip
     return provenance.record(
-        result, fmu_sha256=problem.model.sha256, spec=spec, experiments=experiments,
-        options=options, started=started,
+        _validated(problem, result, test_data), fmu_sha256=problem.model.sha256, spec=spec,
+        experiments=[*experiments, *test_data], options=options, started=started,
     )  # fmt: skip
 
 
@@ -220,6 +235,7 @@ def profile(
     executor: Any = None,
     progress: ProgressCallback | None = None,
     problem: Problem | None = None,
+    test_data: Sequence[Experiment] = (),
 ) -> ProfileResult:
     """Fit, then profile the likelihood of every free parameter.
 
@@ -236,8 +252,8 @@ def profile(
     progress
         Receives ``fmuid.progress.Progress`` events, one per profile point (default: bars
         under the cell in a Jupyter notebook, nothing elsewhere).
-    problem
-        As for :func:`fit`.
+    problem, test_data
+        As for :func:`fit` (``validation`` is computed at the profile's best fit).
 
     Returns
     -------
@@ -257,13 +273,34 @@ def profile(
         "confidence": spec.confidence, "workers": workers,
         "executor": None if executor is None else type(executor).__name__,
         "fit": "given" if fit is not None else "fitted here",
+        "test_data": [e.name for e in test_data],
     }  # fmt: skip
+    _check_test_data(problem, test_data)
     if fit is None:
         fit = fit_problem(
             problem, global_search=spec.global_search, seed=spec.seed, progress=progress
         )
     result = profile_problem(problem, fit, workers=workers, executor=executor, progress=progress)
+    if test_data:
+        result = replace(result, fit=_validated(problem, result.fit, test_data))
     return provenance.record(
-        result, fmu_sha256=problem.model.sha256, spec=spec, experiments=experiments,
-        options=options, started=started,
+        result, fmu_sha256=problem.model.sha256, spec=spec,
+        experiments=[*experiments, *test_data], options=options, started=started,
     )  # fmt: skip
+
+
+def _check_test_data(problem: Problem, test_data: Sequence[Experiment]) -> None:
+    """Check held-out experiments against the problem's FMU and spec, as its data were."""
+    if test_data:
+        model = problem.model
+        check_test_data(problem.spec, model.parameters, model.inputs, model.outputs, test_data)
+
+
+def _validated(problem: Problem, fit: FitResult, test_data: Sequence[Experiment]) -> FitResult:
+    """Return ``fit`` with the held-out error of its estimates on ``test_data``."""
+    if not test_data:
+        return fit
+    entries = held_out_rms(
+        problem.predictor, fit.estimates, test_data, problem.outputs, problem.spec.settle
+    )
+    return replace(fit, validation=tuple(entries))

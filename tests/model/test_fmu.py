@@ -24,6 +24,10 @@ CONTRACT_START = {
     },
     "msd": {"m": 1.1, "k": 4.4, "b": 1.6},
     "msd_parallel": {"m": 1.1, "k1": 3.0, "k2": 1.4, "b": 1.6},
+    "emps": {
+        "M": 95.11, "Fv": 0.0, "Fc": 0.0, "v_c": 0.001, "offset": 0.0, "gtau": 35.15,
+        "kp": 160.18, "kv": 243.45, "vir_max": 10.0,
+    },
 }  # fmt: skip
 CONTRACT_IO = {
     "tractor_implement": (
@@ -32,6 +36,7 @@ CONTRACT_IO = {
     ),
     "msd": (["f"], ["x", "v"]),
     "msd_parallel": (["f"], ["x", "v"]),
+    "emps": (["q_ref"], ["qm", "vir", "v"]),
 }
 
 

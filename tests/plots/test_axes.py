@@ -143,7 +143,7 @@ def diagnosis_inputs(msd_fmu: Path) -> tuple[Diagnosis, DiagnosisSeries]:
         mismatch=True, false_alarm=0.01, evidence=(), tests_before=(), tests_after=(),
         location={"frequency_hz": [1.0, 2.0], "time_windows": [[1.0, 2.0]], "outputs": ["v"],
                   "experiments": [problem.experiments[1].name]},
-        windows=(Window(problem.experiments[0].name, "x", 0.0, 10.0, 3.0),), effect="sensor_lag",
+        windows=(Window(problem.experiments[0].name, "x", 0.0, 10.0, 3.0),), effect="output_lag",
         description="", candidates=(), added_parameters={}, chi2_before=1.0, chi2_after=1.0,
         n_data=164, lrt_p_value=None, bic_before=1.0, bic_after=1.0,
         parameters_before={"k": 4.0}, parameters_after={"k": 4.0},

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import shutil
 import tempfile
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
 from fmuid.api.vetting import VettingPool
 from fmuid.errors import FmuidError
-from fmuid.jobs.records import Kind
+from fmuid.jobs.records import TEST_DATA, Kind
 from fmuid.jobs.store import Dataset, Job, JobStore
 from fmuid.jobs.vet import VetTask
 from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu
@@ -96,6 +96,7 @@ def submit(
     fmu: Upload | None,
     model: str | None,
     space: Upload | None = None,
+    test_data: list[Upload] | None = None,
 ) -> Job:
     """Check a submission in a checking process and queue its job (blocking).
 
@@ -117,6 +118,9 @@ def submit(
         An uploaded FMU or the name of a built-in one (exactly one of them).
     space
         The experiment space JSON (kind ``"design"``, which takes no data).
+    test_data
+        Held-out CSV files (not for ``"design"``), checked like ``data`` and stored as datasets
+        named ``test_data/<name>``.
 
     Returns
     -------
@@ -130,7 +134,10 @@ def submit(
         limit), or 503 when a built-in model is missing.
 
     """
+    test_data = test_data or []
     if kind == "design":
+        if test_data:
+            raise SubmissionError(422, "test_data: kind 'design' takes no test data")
         return _submit_design(store, pool, settings, spec, data, space, fmu, model)
     if space is not None:
         raise SubmissionError(422, f"space: only kind 'design' takes a space, not {kind!r}")
@@ -140,19 +147,30 @@ def submit(
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise SubmissionError(422, f"data: file names must differ; repeated: {duplicates}")
+    test_names = [safe_name(upload.filename, TEST_DATA) for upload in test_data]
+    duplicates = sorted({n for n in test_names if test_names.count(n) > 1})
+    if duplicates:
+        raise SubmissionError(422, f"{TEST_DATA}: file names must differ; repeated: {duplicates}")
     with tempfile.TemporaryDirectory(dir=store.tmp_dir()) as tmp:
         workdir = Path(tmp)
         (workdir / "data").mkdir()
+        (workdir / TEST_DATA).mkdir()
         (workdir / "spec.json").write_text(spec, encoding="utf-8", errors="replace")
         paths = [workdir / "data" / name for name in names]
-        for upload, path in zip(data, paths, strict=True):
+        test_paths = [workdir / TEST_DATA / name for name in test_names]
+        for upload, path in zip([*data, *test_data], [*paths, *test_paths], strict=True):
             _save(upload, path)
         fmu_file, fmu_name = _place_fmu(workdir, fmu, model)
-        answer = pool.check(_task(workdir, names, fmu_file, fmu_name, settings))
+        task = _task(workdir, names, fmu_file, fmu_name, settings)
+        answer = pool.check(replace(task, test_names=test_names))
         if not answer["ok"]:
             raise SubmissionError(answer["status"], answer["detail"])
         fmu_sha = store.add_file(workdir / fmu_file)
         datasets = [Dataset(name, store.add_file(path)) for name, path in zip(names, paths)]
+        datasets += [
+            Dataset(f"{TEST_DATA}/{name}", store.add_file(path))
+            for name, path in zip(test_names, test_paths)
+        ]
     return store.create(kind, spec, fmu_sha, answer["model_name"], datasets)
 
 

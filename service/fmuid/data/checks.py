@@ -11,7 +11,7 @@ from fmuid.data.messages import capped, suggest
 from fmuid.data.spec import Spec
 from fmuid.errors import DataError, SpecError
 
-__all__ = ["check_against_model", "used_inputs"]
+__all__ = ["check_against_model", "check_test_data", "settled_rows", "used_inputs"]
 
 
 def used_inputs(spec: Spec, fmu_inputs: Collection[str], experiment: Experiment) -> list[str]:
@@ -147,3 +147,41 @@ def _experiment_problems(
                 f"got {float(sigma[bad[0]])!r}"
             )
     return problems
+
+
+def check_test_data(
+    spec: Spec,
+    parameters: Collection[str],
+    inputs: Collection[str],
+    outputs: Collection[str],
+    experiments: Sequence[Experiment],
+) -> None:
+    """Check test experiments as the estimation data are checked, and that each has an output.
+
+    No test experiments: nothing to check.
+
+    Raises
+    ------
+    SpecError, DataError
+        Naming the test file and column at fault.
+
+    """
+    if not experiments:
+        return
+    check_against_model(spec, parameters, inputs, outputs, experiments)
+    for exp in experiments:
+        if not any(o in exp.columns for o in spec.outputs):
+            raise DataError(
+                f"{exp.name}: a test file needs at least one fitted output column "
+                f"({', '.join(spec.outputs)})"
+            )
+        kept = settled_rows(exp, spec.settle)
+        if not any(exp.output_mask(o)[kept].any() for o in spec.outputs if o in exp.columns):
+            raise DataError(
+                f"{exp.name}: no output sample after the {spec.settle:g} s settle window"
+            )
+
+
+def settled_rows(experiment: Experiment, settle: float) -> np.ndarray:
+    """Rows of ``experiment`` after its settle-in window (its first ``settle`` seconds)."""
+    return experiment.time >= experiment.time[0] + settle

@@ -178,6 +178,10 @@ class Spec(BaseModel):
     interface
         FMI interface to drive when the FMU has both: ``"auto"`` (co-simulation, the
         exporter's own solver), ``"co_simulation"`` or ``"model_exchange"`` (fmuid's CVode).
+    settle
+        Settle-in window [s]: every experiment's first ``settle`` seconds are simulated but
+        left out of the likelihood and of the validation error (a real plant starts from an
+        unknown state).
 
     """
 
@@ -192,6 +196,7 @@ class Spec(BaseModel):
     seed: Annotated[int, Field(ge=0)] = 0
     physics: dict[str, PhysicsSpec] = {}
     interface: Literal["auto", "co_simulation", "model_exchange"] = "auto"
+    settle: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.0
 
     _source: str = PrivateAttr(default="spec")
 

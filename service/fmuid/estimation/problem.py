@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from fmuid.data import Experiment, ParameterSpec, Spec, used_inputs
+from fmuid.data.checks import settled_rows
 from fmuid.errors import DataError, FmuError
 from fmuid.estimation.predictor import FmuPredictor, Predictor
 from fmuid.estimation.sigma import SPLINE_METHOD, spline_residual_sigma
@@ -82,10 +83,11 @@ class Problem:
         self.predictor: Predictor = predictor or FmuPredictor(self.model, spec.fixed, inputs)
         self.masks = [
             [
-                exp.output_mask(o) if o in exp.columns else np.zeros(exp.n_rows, bool)
+                exp.output_mask(o) & kept if o in exp.columns else np.zeros(exp.n_rows, bool)
                 for o in self.outputs
             ]
             for exp in self.experiments
+            for kept in [settled_rows(exp, spec.settle)]
         ]
         self.data = [
             [
@@ -105,7 +107,8 @@ class Problem:
         ]
         self.n_data = int(sum(m.sum() for ms in self.masks for m in ms))
         if self.n_data == 0:
-            raise DataError("no output samples to fit in any experiment")
+            after = f" after the {spec.settle:g} s settle window" if spec.settle else ""
+            raise DataError(f"no output samples to fit in any experiment{after}")
         self.simulations = 0
 
     @property

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fmuid.estimation.space import ParameterSpace
 from fmuid.provenance import Provenance, entry
+
+if TYPE_CHECKING:
+    from fmuid.estimation.validation import ValidationEntry
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,8 @@ class FitResult:
         How the FMU was run: ``fmi_version``, ``interface`` and ``input_handling``.
     units
         Unit of each free and fixed parameter, input and output that declares one in the FMU.
+    validation
+        Held-out error per test experiment and output (empty without test data).
 
     """
 
@@ -84,6 +89,7 @@ class FitResult:
     fmu_info: dict[str, str] = field(default_factory=dict)
     units: dict[str, str] = field(default_factory=dict)
     provenance: Provenance | None = None
+    validation: tuple[ValidationEntry, ...] = ()
 
     @property
     def space(self) -> ParameterSpace:
@@ -138,7 +144,12 @@ class FitResult:
             "cost": self.cost.to_dict(),
             "units": dict(self.units),
             **entry(self.provenance),
+            **self.validation_dict(),
         }
+
+    def validation_dict(self) -> dict[str, Any]:
+        """Return ``{"validation": [...]}`` when there is test data, else an empty dict."""
+        return {"validation": [v.to_dict() for v in self.validation]} if self.validation else {}
 
     def to_frame(self) -> Any:
         """Return a pandas table of the estimates, one row per free parameter (needs pandas).

@@ -19,6 +19,11 @@ STATUSES: tuple[Status, ...] = get_args(Status)
 FINAL_STATUSES: tuple[Status, ...] = ("done", "failed", "cancelled")
 
 
+TEST_DATA = "test_data"
+"""Folder of the held-out CSV files of a job, and the prefix of their dataset names
+(``test_data/<name>``)."""
+
+
 @dataclass(frozen=True)
 class Dataset:
     """One uploaded CSV file: its original file name (the experiment name) and content hash."""

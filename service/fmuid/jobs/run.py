@@ -37,6 +37,7 @@ from typing import Any
 from fmuid.errors import FmuidError
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.health import free_space_problem
+from fmuid.jobs.records import TEST_DATA
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -117,7 +118,7 @@ def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[P
         link.symlink_to(store.blob_path(job.fmu_sha256))
         os.replace(link, fmu)
     data_dir = workdir / "data"
-    data_dir.mkdir()
+    (data_dir / TEST_DATA).mkdir(parents=True)
     paths = []
     for dataset in job.datasets:
         path = data_dir / dataset.name
@@ -134,16 +135,19 @@ def run_engine(
     progress: ProgressWriter,
     dask_scheduler: str | None,
     checkpoint: Path | None = None,
+    test_data: list[Any] | None = None,
 ) -> Any:
     """Call ``fmuid.fit``, ``profile``, ``diagnose`` or ``design`` and return its result.
 
     For ``design``, ``experiments`` holds the experiment space instead of datasets, and
     ``checkpoint`` the folder that keeps its finished evaluations across restarts.
+    ``test_data`` are the held-out experiments of a fit, profile or diagnosis.
     """
+    tests = test_data or []
     import fmuid
 
     if kind == "fit":
-        return fmuid.fit(fmu, experiments, spec, progress=progress)
+        return fmuid.fit(fmu, experiments, spec, progress=progress, test_data=tests)
     if kind in ("profile", "design"):
         with ExitStack() as stack:
             executor = None
@@ -161,8 +165,10 @@ def run_engine(
                     fmu, spec, experiments[0], progress=progress, executor=executor,
                     checkpoint=checkpoint,
                 )  # fmt: skip
-            return fmuid.profile(fmu, experiments, spec, progress=progress, executor=executor)
-    return fmuid.diagnose(fmu, experiments, spec, progress=progress)
+            return fmuid.profile(
+                fmu, experiments, spec, progress=progress, executor=executor, test_data=tests
+            )
+    return fmuid.diagnose(fmu, experiments, spec, progress=progress, test_data=tests)
 
 
 def run_job(
@@ -188,13 +194,15 @@ def run_job(
             _log_fmi_version(fmu)
             spec = spec_from_json(job.spec, "spec")
             experiments: list[Any] = []
+            tests = [load_experiment(p) for p in data if p.parent.name == TEST_DATA]
+            data = [p for p in data if p.parent.name != TEST_DATA]
             if job.kind == "design":
                 from fmuid.experiment_design import load_space
 
                 experiments.append(load_space(data[0]))
             else:
                 experiments.extend(load_experiment(path) for path in data)
-            result = run_engine(job.kind, fmu, experiments, spec, progress, dask, checkpoint)
+            result = run_engine(job.kind, fmu, experiments, spec, progress, dask, checkpoint, tests)
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:
             store.fail(job.id, str(exc))

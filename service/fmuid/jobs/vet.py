@@ -24,9 +24,11 @@ from pathlib import Path
 from typing import Any
 
 from fmuid.data import InputLimits, Spec, check_against_model, load_experiment, spec_from_json
+from fmuid.data.checks import check_test_data
 from fmuid.data.limits import over_limit
 from fmuid.errors import FmuidError, SpecError
 from fmuid.jobs.fmucheck import FmuLimits, check_fmu
+from fmuid.jobs.records import TEST_DATA
 from fmuid.model.fmu import FmuModel
 
 logger = logging.getLogger(__name__)
@@ -64,6 +66,8 @@ class VetTask:
         CPU time the check may use.
     space_file
         Name of a design job's experiment space in ``workdir`` (such a job has no CSV files).
+    test_names
+        Base names of the held-out CSV files in ``workdir/test_data``.
 
     """
 
@@ -75,6 +79,7 @@ class VetTask:
     input_limits: dict[str, int] = field(default_factory=dict)
     fmu_limits: dict[str, Any] = field(default_factory=dict)
     space_file: str | None = None
+    test_names: list[str] = field(default_factory=list)
 
     def to_json(self) -> str:
         """One line of JSON."""
@@ -112,6 +117,8 @@ def vet(task: VetTask) -> dict[str, Any]:
             load_experiment(workdir / "data" / name, input_limits) for name in task.data_names
         ]
         check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
+        tests = [load_experiment(workdir / TEST_DATA / n, input_limits) for n in task.test_names]
+        check_test_data(spec, model.parameters, model.inputs, model.outputs, tests)
     except FmuidError as exc:
         return {"ok": False, "status": 422, "detail": str(exc)}
     return {"ok": True, "model_name": model.model_name}

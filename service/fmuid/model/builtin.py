@@ -16,7 +16,7 @@ from fmuid.model.build import build_fmus
 
 logger = logging.getLogger(__name__)
 
-BUILTIN_MODELS = ("tractor_implement", "msd", "msd_parallel")
+BUILTIN_MODELS = ("tractor_implement", "msd", "msd_parallel", "emps")
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 

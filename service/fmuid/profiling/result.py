@@ -201,6 +201,7 @@ class ProfileResult:
             "cost": self.cost.to_dict(),
             "units": dict(self.fit.units),
             **entry(self.provenance),
+            **self.fit.validation_dict(),
         }
 
     def to_frame(self) -> Any:

@@ -78,6 +78,10 @@ async def create_job(
     model: Annotated[
         str | None, Form(description="Name of a built-in FMU, instead of 'fmu'.")
     ] = None,
+    test_data: Annotated[
+        list[UploadFile] | None,
+        File(description="Held-out CSV files: the fitted model's simulation error on each."),
+    ] = None,
 ) -> JobCreated:
     """Check the inputs (in a checking process) and queue a job; its id comes back (202)."""
     await anyio.to_thread.run_sync(_check_room, checks, store, settings.queue_limit)
@@ -93,6 +97,7 @@ async def create_job(
             Upload(fmu.filename, fmu.file) if fmu is not None else None,
             model or None,
             Upload(space.filename, space.file) if space is not None else None,
+            [Upload(d.filename, d.file) for d in test_data or []],
         )
     except SubmissionError as exc:
         raise HTTPException(status_code=exc.status_code, detail=str(exc)) from exc
