@@ -18,6 +18,7 @@ from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis, E
 from fmuid.errors import SpecError
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
+from fmuid.provenance import read
 
 
 def load_result(path: str | Path) -> Any:
@@ -110,6 +111,7 @@ def fit_from_dict(data: dict[str, Any]) -> FitResult:
             **data.get("units", {}),
             **{n: params[n]["unit"] for n in names if params[n].get("unit")},
         },
+        provenance=read(data),
     )
 
 
@@ -170,6 +172,7 @@ def profile_from_dict(data: dict[str, Any]) -> ProfileResult:
         structural_check=dict(data.get("structural_check", {})),
         cost=_cost(data.get("cost")),
         checks=dict(data.get("checks", {})),
+        provenance=read(data),
     )
 
 
