@@ -259,4 +259,5 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         discriminating_experiment=data.get("discriminating_experiment"),
         effects=tuple(_step(e) for e in data.get("effects", ())),
         validation=tuple(data.get("validation", ())),
+        provenance=read(data),
     )

@@ -8,6 +8,7 @@ from typing import Any
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.residual_tests import TestResult, Window
 from fmuid.estimation.result import Cost
+from fmuid.provenance import Provenance, entry
 
 
 @dataclass(frozen=True)
@@ -203,6 +204,7 @@ class Diagnosis:
     discriminating_experiment: dict[str, Any] | None = None
     effects: tuple[EffectStep, ...] = ()
     validation: tuple[dict[str, Any], ...] = ()
+    provenance: Provenance | None = None
 
     def whiteness(self, after: bool) -> dict[str, float]:
         """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""
@@ -253,6 +255,7 @@ class Diagnosis:
             "discriminating_experiment": self.discriminating_experiment,
             "effects": [e.to_dict() for e in self.effects],
             "validation": list(self.validation),
+            **entry(self.provenance),
         }
         return {"verdict": verdict(out), **out}
 

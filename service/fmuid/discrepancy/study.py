@@ -5,12 +5,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from fmuid import provenance
 from fmuid.data import Experiment, Spec
+from fmuid.data.checks import check_test_data
 from fmuid.discrepancy.engine import DiagnoseOptions, diagnose_problem
 from fmuid.discrepancy.result import Diagnosis
 from fmuid.estimation.problem import Problem
 from fmuid.model.fmu import FmuModel
-from fmuid.progress import ProgressCallback
+from fmuid.progress import ProgressCallback, default_progress
 
 
 def diagnose(
@@ -52,5 +54,21 @@ def diagnose(
     """
     from fmuid.estimation.study import make_problem
 
+    started = provenance.now()
+    progress = default_progress(progress)
     problem = problem or make_problem(fmu_path, experiments, spec)
-    return diagnose_problem(problem, options=options, progress=progress, test_data=test_data)
+    if test_data:
+        model = problem.model
+        check_test_data(spec, model.parameters, model.inputs, model.outputs, test_data)
+    result = diagnose_problem(problem, options=options, progress=progress, test_data=test_data)
+    held = [e.name for e in test_data]
+    return provenance.record(
+        result, fmu_sha256=problem.model.sha256, spec=spec, experiments=[*experiments, *test_data],
+        options={"stage": "diagnose", **_options(options), "test_data": held}, started=started,
+    )  # fmt: skip
+
+
+def _options(options: DiagnoseOptions) -> dict[str, object]:
+    """Return the options as JSON values (nested settings as their text)."""
+    plain = (int, float, bool)
+    return {k: v if isinstance(v, plain) else repr(v) for k, v in vars(options).items()}
