@@ -173,11 +173,7 @@ def run_feedback(
         except OverflowError:
             g[:] = np.inf
         if not np.all(np.isfinite(g)):
-            raise FmuError(
-                f"the loop closed around the FMU by the feedback terms diverged at t = {t} s "
-                "(outputs or fed-back terms beyond the float range)",
-                function="feedback",
-            )
+            raise diverged(t)
         fill((values[k] + g).tolist())
         if (status := set_inputs()) > 1:  # fmi2SetReal & co.
             raise instance.fail(set_name, status, f"for the inputs at t = {t} s")
@@ -197,6 +193,15 @@ def run_feedback(
         if status > 1:
             return result, instance.step_outcome(status, t)
     return result, None
+
+
+def diverged(t: float) -> FmuError:
+    """Return the error of a loop the feedback terms drove beyond the float range at ``t`` [s]."""
+    return FmuError(
+        f"the loop closed around the FMU by the feedback terms diverged at t = {t} s "
+        "(outputs or fed-back terms beyond the float range)",
+        function="feedback",
+    )
 
 
 def feedback_inputs(

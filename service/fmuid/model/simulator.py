@@ -31,6 +31,7 @@ from fmuid.model.exchange import RTOL, run_model_exchange
 from fmuid.model.feedback import Feedback, feedback_inputs, fine_times, run_feedback
 from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
+from fmuid.model.native import run_native_feedback
 from fmuid.model.plan import RunPlan, make_plan
 
 logger = logging.getLogger(__name__)
@@ -231,9 +232,9 @@ class Simulator(SimulatorBase):
         instance.enter_initialization(t0, None)
         instance.set(inputs, plan.value[0].tolist(), t0)
         instance.call("ExitInitializationMode", when=f"at t = {t0} s")
-        result, stopped = run_feedback(
-            instance, plan, inputs, out, sources, feedback, self.model.can_interpolate_inputs
-        )
+        args = (instance, plan, inputs, out, sources, feedback, self.model.can_interpolate_inputs)
+        done = run_native_feedback(*args) if self.native else None
+        result, stopped = done or run_feedback(*args)
         self._terminated = stopped is not None
         rows = np.searchsorted(fine, t_out)
         if stopped is not None and np.any(np.isnan(result[rows])):

@@ -65,6 +65,8 @@ def native_library() -> ctypes.CDLL | None:
         detail = getattr(exc, "stderr", None) or exc
         logger.warning("native master loop unavailable (%s); using the Python loop", detail)
         return None
-    lib.fmuid_cosimulation.restype = ctypes.c_int
+    for function in (lib.fmuid_cosimulation, lib.fmuid_feedback):
+        function.restype = ctypes.c_int
     lib.fmuid_cosimulation.argtypes = [ctypes.c_void_p]
+    lib.fmuid_feedback.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
     return lib
