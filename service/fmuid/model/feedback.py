@@ -109,8 +109,10 @@ def fine_times(output_time: np.ndarray, step: float) -> np.ndarray:
     pieces = np.maximum(np.ceil(gaps / step - 1e-9), 1).astype(int)
     if not np.any(pieces > 1):
         return t
-    extra = [t[k] + gaps[k] * np.arange(1, n) / n for k, n in enumerate(pieces.tolist()) if n > 1]
-    return np.unique(np.concatenate([t, *extra]))
+    j = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+    n = np.repeat(pieces, pieces)
+    extra = np.repeat(t[:-1], pieces) + np.repeat(gaps, pieces) * j / n
+    return np.unique(np.concatenate([t, extra]))
 
 
 def run_feedback(
