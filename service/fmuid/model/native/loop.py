@@ -21,6 +21,8 @@ from fmuid.model.plan import RunPlan
 
 _P = ctypes.c_void_p
 _LONG = ctypes.c_long
+LOOPS_KEPT = 32
+"""Loops kept per input channels (one per run plan and outputs, typically)."""
 CALL_SET, CALL_DERIVATIVES, CALL_GET, CALL_STEP, CALL_SUB_SET, CALL_GET_SOURCES, DIVERGED = range(7)
 
 
@@ -63,25 +65,44 @@ def build_loop(
     derivatives: bool,
     sub_step: float | None,
 ) -> tuple[Loop, np.ndarray, list[object]]:
-    """Fill a :class:`Loop` for one run.
+    """Return a :class:`Loop` for one run (built once per plan and channels, then reused).
 
     ``derivatives``: set input slopes (fmi2SetRealInputDerivatives); ``sub_step``: longest
     sub-step of moving intervals (None: never sub-step). Returns the loop, the result array it
     writes (NaN where no row is read) and the objects it points into (keep them alive).
     """
+    key = f"native {id(plan)} {id(outputs)} {id(instance)} {derivatives} {sub_step}"
+    cached = inputs.helpers.get(key)  # holds plan, outputs and instance: their ids stay theirs
+    if cached is None:
+        kept = [k for k in inputs.helpers if k.startswith("native ")]
+        if len(kept) >= LOOPS_KEPT:
+            for old in kept:
+                del inputs.helpers[old]
+        cached = (plan, outputs, instance, *_new_loop(instance, plan, inputs, outputs,
+                                                      derivatives, sub_step))  # fmt: skip
+        inputs.helpers[key] = cached
+    loop, alive = cached[3], cached[4]
+    component = instance.component
+    loop.component = component.value if isinstance(component, _P) else component
+    result = np.full((plan.n_rows, outputs.size), np.nan)
+    loop.result = _pointer(result)
+    return loop, result, alive
+
+
+def _new_loop(
+    instance: Instance, plan: RunPlan, inputs: Channels, outputs: Channels, derivatives: bool,
+    sub_step: float | None,
+) -> tuple[Loop, list[object]]:  # fmt: skip
     p = instance.prefix
     grid = plan.arrays
-    result = np.full((plan.n_rows, outputs.size), np.nan)
     work = np.empty(inputs.size + outputs.size)
     cont = inputs.continuous
     cont_index = np.array(cont, dtype=np.int64)
     cont_refs = inputs.subset(cont).refs
     orders = np.ones(len(cont), dtype=np.int32)
     float_type = "Float64" if instance.v3 else "Real"
-    component = instance.component
     loop = Loop(
-        component.value if isinstance(component, _P) else component,
-        _address(instance, f"{p}Set{float_type}"),
+        None, _address(instance, f"{p}Set{float_type}"),
         _address(instance, "fmi2SetRealInputDerivatives") if derivatives else None,
         _address(instance, f"{p}DoStep"), _address(instance, f"{p}Get{float_type}"),
         int(instance.v3), len(plan.times), _pointer(grid.times), _pointer(grid.value),
@@ -89,10 +110,10 @@ def build_loop(
         inputs.size, _pointer(inputs.refs), len(cont), _pointer(cont_index),
         _pointer(cont_refs), _pointer(orders), int(derivatives),
         math.inf if sub_step is None else sub_step, outputs.size,
-        _pointer(outputs.refs), _pointer(grid.row_start), _pointer(grid.rows),
-        _pointer(result), _pointer(work),
+        _pointer(outputs.refs), _pointer(grid.row_start), _pointer(grid.rows), None,
+        _pointer(work),
     )  # fmt: skip
-    return loop, result, [grid, work, cont_index, cont_refs, orders]
+    return loop, [grid, work, cont_index, cont_refs, orders]
 
 
 def run_native_cosimulation(
