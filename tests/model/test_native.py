@@ -128,3 +128,24 @@ def test_native_feedback_raises_the_python_loops_divergence(msd_fmu: Path) -> No
 
     _both(sim, run)
     assert messages[0] == messages[1]
+
+
+def test_without_a_compiled_loop_the_python_loop_runs(
+    msd_fmu: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    blocked = tmp_path / "not-a-folder"
+    blocked.write_text("")
+    monkeypatch.setenv("FMUID_FMU_DIR", str(blocked))  # the loop cannot be compiled there
+    native_library.cache_clear()
+    try:
+        sim = Simulator(msd_fmu)
+        y = sim.simulate({}, T, {"f": U}, T, ["x"])
+        again = sim.simulate({}, T, {"f": U}, T, ["x"])
+        sim.close()
+        assert native_library() is None
+    finally:
+        native_library.cache_clear()
+    warnings = [r for r in caplog.records if "native master loop unavailable" in r.message]
+    assert len(warnings) == 1 and "using the Python loop" in warnings[0].message
+    np.testing.assert_array_equal(y, again)
+    assert np.max(np.abs(y)) > 0.1
