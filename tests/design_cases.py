@@ -44,8 +44,10 @@ SMALL = {"candidates": 2, "draws": 2, "verify_designs": 1, "robust": {"points": 
 
 
 def comparable(result_dict):
-    """The result JSON without the wall times, which differ from run to run."""
-    return {**result_dict, "cost": result_dict["cost"]["simulations"]}
+    """The result JSON without the wall times and provenance, which differ from run to run."""
+    out = {**result_dict, "cost": result_dict["cost"]["simulations"]}
+    out.pop("provenance", None)
+    return out
 
 
 class Stop(BaseException):

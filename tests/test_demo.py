@@ -1,9 +1,11 @@
+import html
 import re
 from html.parser import HTMLParser
 
 import pytest
 
 from fmuid.demo import NOMINAL, run_demo
+from report.test_report_text import unreadable
 
 
 class _Images(HTMLParser):
@@ -27,8 +29,8 @@ def test_small_grid_demo_writes_the_study_report(tmp_path):
     parser = _Images()
     parser.feed(text)
     assert len(parser.images) >= 6
-    for src in parser.images:
-        assert (index.parent / src).stat().st_size > 1000
+    for src in parser.images:  # embedded PNGs
+        assert src.startswith("data:image/png;base64,") and len(src) > 1000
     # the Table 3.3 comparison lists every tire parameter; at SNR 1000 the simultaneous CIs
     # of C_atf, C_atr and sig_tf contain the true values, as in the thesis
     table = re.search(r'<table id="summary">(.*?)</table>', text, re.S).group(1)
@@ -42,4 +44,7 @@ def test_small_grid_demo_writes_the_study_report(tmp_path):
         low, high = (float(v) for v in rows[name][6].strip("[]").split(", "))
         assert low < NOMINAL[name] < high
     assert "Experiment advice" in text
+    assert unreadable(html.unescape(re.sub(r"<[^>]+>", " ", text.split("<body>")[1]))) == []
+    assert "seed 0" in text and "sigma = max|gam_t| / SNR" in text
+    assert any(line.startswith("drawing the per-dataset reports: 4/4") for line in lines)
     assert len(list((tmp_path / "demo").glob("*/index.html"))) == 4

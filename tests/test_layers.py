@@ -7,7 +7,8 @@ module ``a.b.c`` when that is a module, else to ``a.b``.
 
 The layers, lowest first; a module may import its own layer and lower ones only::
 
-    fmuid (version, lazy facade) / errors / progress / frames (pandas tables)
+    fmuid (version, lazy facade) / errors / progress / frames (pandas tables) / provenance /
+      readable (how numbers read)
       < data
       < model
       < formats (PEtab, SSV: read with the model's variables)
@@ -34,7 +35,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "service" / "fmuid"
 
 LAYERS = [
-    {"fmuid", "errors", "progress", "frames"},
+    {"fmuid", "errors", "progress", "frames", "provenance", "readable"},
     {"data"},
     {"model"},
     {"formats"},

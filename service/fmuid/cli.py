@@ -16,6 +16,7 @@ from fmuid.console import (
     EXIT_INTERRUPTED,
     ProgressDisplay,
     exit_on_interrupt,
+    fit_table,
     log_handler,
     profile_table,
 )
@@ -53,10 +54,29 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any, Any]:
     spec = load_spec(Path(args.spec))
     if args.interface:
         spec = spec.model_copy(update={"interface": args.interface})
-    spec = apply_start(spec, args.start)
+    if args.start and args.start.lower().endswith(".json"):
+        spec = _start_at_result(spec, args.start)
+    else:
+        spec = apply_start(spec, args.start)
     if args.settle is not None:
         spec = spec.model_copy(update={"settle": args.settle})
     return fmu, experiments, spec, make_problem(fmu, experiments, spec)
+
+
+def _start_at_result(spec: Any, path: str) -> Any:
+    """Start at the estimates of a fit or profile result JSON, without the global search."""
+    from fmuid.formats.ssv import with_start_values
+
+    try:
+        saved = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise DataError(f"{path}: not a readable result JSON: {exc}") from exc
+    params = saved.get("parameters") if isinstance(saved, dict) else None
+    if not isinstance(params, dict) or not all("estimate" in p for p in params.values()):
+        raise DataError(f"{path}: not a fit or profile result (no parameter estimates)")
+    log.info("starting at the estimates of %s (no global search)", path)
+    spec = with_start_values(spec, {n: p["estimate"] for n, p in params.items()}, path)
+    return spec.model_copy(update={"global_search": False})
 
 
 def _test_data(args: argparse.Namespace) -> list[Any]:
@@ -181,7 +201,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
-    print(f"chi2 {result.chi2:.6g} with {result.n_data} data points; wrote {args.out}")  # noqa: T201
+    print(fit_table(result))  # noqa: T201
     return EXIT_OK
 
 
@@ -310,7 +330,11 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--spec", required=True, help="spec JSON")
         p.add_argument("--out", required=True, help="result JSON")
         p.add_argument("--report", help="write index.html and plots into this folder")
-        p.add_argument("--start", help="SSP parameter-value file (.ssv): start values")
+        p.add_argument(
+            "--start",
+            help="start values: an SSP parameter-value file (.ssv), or a fit or profile result "
+            "(.json: its estimates, without the global search)",
+        )
         p.add_argument(
             "--test-data", action="append", default=[],
             help="held-out CSV file (repeatable): the fitted model's simulation error on it",
@@ -351,6 +375,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--grid", choices=("full", "small"), default="full")
     p.add_argument("--workers", type=int)
     p.set_defaults(func=_cmd_demo)
+    for command in sub.choices.values():  # -v also after the command: fmuid fit ... -v
+        command.add_argument(
+            "-v", "--verbose", action="store_true", default=argparse.SUPPRESS, help="debug logging"
+        )
     return parser
 
 
@@ -358,7 +386,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``fmuid`` command; return its exit status."""
     args = _parser().parse_args(argv)
     tty = sys.stderr.isatty()
-    quiet = tty and args.command in ("fit", "profile", "diagnose")
+    quiet = tty and args.command in ("fit", "profile", "diagnose", "design")
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.WARNING if quiet else logging.INFO,
         handlers=[log_handler(tty)],

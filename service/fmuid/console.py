@@ -16,15 +16,16 @@ from types import FrameType, TracebackType
 from typing import TYPE_CHECKING, Any
 
 from fmuid.progress import Progress
+from fmuid.readable import OPEN
 
 if TYPE_CHECKING:
+    from fmuid.estimation.result import FitResult
     from fmuid.model.info import ModelInfo, VariableInfo
     from fmuid.profiling.result import ProfileResult
 
 log = logging.getLogger("fmuid")
 
 EXIT_INTERRUPTED = 130
-OPEN = "open"
 
 
 class ProgressDisplay:
@@ -33,8 +34,9 @@ class ProgressDisplay:
     Use as a context manager around the stage so that the bar is closed on the way out.
     """
 
-    def __init__(self, tty: bool | None = None) -> None:
+    def __init__(self, tty: bool | None = None, console: Any = None) -> None:
         self.tty = sys.stderr.isatty() if tty is None else tty
+        self.console = console
         self.last = 0.0
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
@@ -49,15 +51,22 @@ class ProgressDisplay:
                 TimeElapsedColumn,
             )
             from rich.progress import Progress as Bar
+            from rich.table import Column
 
+            # name, bar, count and clock keep their width; the detail takes what is left of
+            # the line (80 columns leave it about 30) and ends in an ellipsis
             self._bar = Bar(
-                TextColumn("{task.description:>9s}"),
-                BarColumn(),
-                MofNCompleteColumn(),
+                TextColumn("{task.description:>8s}", table_column=Column(no_wrap=True)),
+                BarColumn(bar_width=12),
+                MofNCompleteColumn(table_column=Column(no_wrap=True)),
                 TimeElapsedColumn(),
-                TextColumn("{task.fields[detail]}"),
-                console=Console(stderr=True),
+                TextColumn(
+                    "{task.fields[detail]}",
+                    table_column=Column(no_wrap=True, overflow="ellipsis", ratio=1),
+                ),
+                console=self.console or Console(stderr=True),
                 transient=False,
+                expand=True,
             )
             self._bar.start()
         return self
@@ -68,20 +77,23 @@ class ProgressDisplay:
         if self._bar is not None:
             if kind is None:  # the stage finished: its estimate of the work left is moot
                 for task in self._bar.tasks:
-                    self._bar.update(task.id, completed=task.total)
+                    total = task.total if task.total is not None else task.completed
+                    self._bar.update(task.id, completed=total, total=total)
             self._bar.stop()
 
     def __call__(self, event: Progress) -> None:
         """Show one event."""
         if self._bar is not None:
             task = self._tasks.get(event.stage)
-            if task is None:
-                task = self._bar.add_task(event.stage, total=event.total, detail="")
+            if task is None:  # a total of 0: not known ahead (the refinement); shown as "n/?"
+                task = self._bar.add_task(event.stage, total=event.total or None, detail="")
                 self._tasks[event.stage] = task
-            self._bar.update(task, completed=event.done, total=event.total, detail=event.detail)
+            self._bar.update(task, completed=event.done, detail=event.detail)
+            if event.total:
+                self._bar.update(task, total=event.total)
             return
         now = time.monotonic()
-        if event.done < event.total and now - self.last < 2.0:
+        if (event.done < event.total or not event.total) and now - self.last < 2.0:
             return
         self.last = now
         log.info("%s: %d/%d %s", event.stage, event.done, event.total, event.detail)
@@ -112,6 +124,24 @@ def table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     ]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
+
+
+def fit_table(result: FitResult) -> str:
+    """Format a fit as a table: estimate, unit, bounds (and which estimates lie on one)."""
+    on_bound = {n for n, p in result.to_dict()["parameters"].items() if p["at_bound"]}
+    rows = [
+        [
+            name,
+            _number(result.estimates[name]),
+            result.units.get(name, ""),
+            f"[{_number(result.lower[name])}, {_number(result.upper[name])}]",
+            *(["yes" if name in on_bound else "no"] if on_bound else []),
+        ]
+        for name in result.names
+    ]
+    header = ["parameter", "estimate", "unit", "bounds", *(["on a bound"] if on_bound else [])]
+    text = table(header, rows)
+    return f"{text}\nchi2 {result.chi2:.6g} with {result.n_data} data points"
 
 
 def profile_table(result: ProfileResult) -> str:
@@ -193,6 +223,8 @@ def info_text(info: ModelInfo) -> str:
             found += {True: "; a reset run equals a fresh instance's", None: "",
                       False: "; its reset is UNRELIABLE (fmuid gives every run a fresh instance)"
                       }[h.reset_reliable]  # fmt: skip
+            if h.ignored:
+                found += f"; it IGNORES the parameters {', '.join(h.ignored)} that fmuid sets"
         parts.append(f"\nhealth ({start:g}-{stop:g} s): {found}")
     return "\n".join(parts)
 

@@ -12,11 +12,13 @@ from typing import Any
 
 import numpy as np
 
+from fmuid.discrepancy.effects import RENAMED, RENAMED_PARAMETERS
 from fmuid.discrepancy.residual_tests import TestResult, Window
-from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis
+from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis, EffectStep
 from fmuid.errors import SpecError
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
+from fmuid.provenance import read
 
 
 def load_result(path: str | Path) -> Any:
@@ -109,6 +111,7 @@ def fit_from_dict(data: dict[str, Any]) -> FitResult:
             **data.get("units", {}),
             **{n: params[n]["unit"] for n in names if params[n].get("unit")},
         },
+        provenance=read(data),
     )
 
 
@@ -169,6 +172,7 @@ def profile_from_dict(data: dict[str, Any]) -> ProfileResult:
         structural_check=dict(data.get("structural_check", {})),
         cost=_cost(data.get("cost")),
         checks=dict(data.get("checks", {})),
+        provenance=read(data),
     )
 
 
@@ -183,8 +187,37 @@ def _test(t: dict[str, Any]) -> TestResult:
     )
 
 
+def _renamed(data: dict[str, Any]) -> dict[str, Any]:
+    """Map the effect and parameter names of earlier versions to today's (as JSON text)."""
+    text = json.dumps(data)
+    for old, new in {**RENAMED, **RENAMED_PARAMETERS}.items():
+        text = text.replace(f'"{old}"', f'"{new}"')
+    return dict(json.loads(text))
+
+
+def _step(e: dict[str, Any]) -> EffectStep:
+    return EffectStep(
+        e["effect"], e.get("label", e["effect"]), e.get("description", ""),
+        {k: _added(v) for k, v in e.get("parameters", {}).items()},
+        float(e["chi2_before"]), float(e["chi2_after"]), float(e["p_value"]),
+        float(e.get("p_adjusted", e["p_value"])), e.get("coupling_error"),
+    )  # fmt: skip
+
+
+def _added(v: dict[str, Any]) -> AddedEstimate:
+    return AddedEstimate(
+        float(v["estimate"]), _interval(v["ci"]), float(v["confidence"]), v.get("unit", ""),
+        float(v["off"]), bool(v["excludes_off"]),
+    )  # fmt: skip
+
+
 def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
-    """Build a :class:`Diagnosis` from ``Diagnosis.to_dict()``."""
+    """Build a :class:`Diagnosis` from ``Diagnosis.to_dict()`` (of this or an earlier version).
+
+    Effect and parameter names of earlier versions read as today's (``sensor_lag`` as
+    ``output_lag``, ``tau_sensor`` as ``tau_outputs``).
+    """
+    data = _renamed(data)
     params = data.get("parameters", {})
     return Diagnosis(
         mismatch=bool(data["mismatch"]),
@@ -206,17 +239,7 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         effect=data.get("effect"),
         description=data.get("description", ""),
         candidates=tuple(CandidateScore(**c) for c in data.get("candidates", ())),
-        added_parameters={
-            k: AddedEstimate(
-                float(v["estimate"]),
-                _interval(v["ci"]),
-                float(v["confidence"]),
-                v.get("unit", ""),
-                float(v["off"]),
-                bool(v["excludes_off"]),
-            )
-            for k, v in data.get("added_parameters", {}).items()
-        },
+        added_parameters={k: _added(v) for k, v in data.get("added_parameters", {}).items()},
         chi2_before=float(data["chi2_before"]),
         chi2_after=float(data["chi2_after"]),
         n_data=int(data.get("n_data", 0)),
@@ -234,4 +257,6 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         cost=_cost(data.get("cost")),
         units=dict(data.get("units", {})),
         discriminating_experiment=data.get("discriminating_experiment"),
+        effects=tuple(_step(e) for e in data.get("effects", ())),
+        validation=tuple(data.get("validation", ())),
     )

@@ -5,26 +5,34 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fmuid import provenance
 from fmuid.data import Experiment, Spec
 from fmuid.data.checks import check_test_data
 from fmuid.errors import DataError, FmuError, SpecError
-from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.predictor import merged_inputs
-from fmuid.estimation.problem import Problem
-from fmuid.estimation.result import FitResult
-from fmuid.estimation.study import make_problem
 from fmuid.estimation.validation import held_out_rms
 from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel
 from fmuid.model.registry import get_simulator
-from fmuid.profiling.engine import profile_problem
-from fmuid.profiling.result import ProfileResult
-from fmuid.progress import ProgressCallback
+from fmuid.progress import ProgressCallback, default_progress
+
+if TYPE_CHECKING:  # the fit and profile machinery is imported on first use: simulate starts fast
+    from fmuid.estimation.problem import Problem
+    from fmuid.estimation.result import FitResult
+    from fmuid.profiling.result import ProfileResult
+
+
+def __getattr__(name: str) -> Any:
+    if name != "make_problem":
+        raise AttributeError(f"module 'fmuid.stages' has no attribute {name!r}")
+    from fmuid.estimation.study import make_problem
+
+    return make_problem
 
 
 @dataclass(frozen=True)
@@ -52,6 +60,18 @@ class Simulation:
     outputs: dict[str, np.ndarray]
     model: FmuModel
     input_handling: str
+
+    def to_frame(self) -> Any:
+        """Return a pandas table indexed by ``time`` [s]: inputs, then outputs (needs pandas).
+
+        The columns are what ``fmuid simulate --with-inputs`` writes.
+        """
+        from fmuid.frames import pandas_module
+
+        pandas = pandas_module()
+        frame = pandas.DataFrame({**self.inputs, **self.outputs}, index=self.time)
+        frame.index.name = "time"
+        return frame
 
 
 def simulate(
@@ -160,7 +180,8 @@ def fit(
     spec
         The study (``fmuid.data.load_spec``).
     progress
-        Receives ``fmuid.progress.Progress`` events.
+        Receives ``fmuid.progress.Progress`` events (default: bars under the cell in a
+        Jupyter notebook, nothing elsewhere).
     problem
         The problem :func:`make_problem` built of these inputs, to hand on one already built
         (e.g. the one the report then draws from); default: built here.
@@ -184,12 +205,24 @@ def fit(
     >>> result = fmuid.fit("fmus/msd.fmu", [load_experiment("step.csv")], load_spec("spec.json"))
 
     """
+    started = provenance.now()
+    progress = default_progress(progress)
+    from fmuid.estimation.optimize import fit_problem
+    from fmuid.estimation.study import make_problem
+
     problem = problem or make_problem(fmu, experiments, spec)
     _check_test_data(problem, test_data)
     result = fit_problem(
         problem, global_search=spec.global_search, seed=spec.seed, progress=progress
     )
-    return _validated(problem, result, test_data)
+    options = {
+        "stage": "fit", "global_search": spec.global_search, "interface": spec.interface,
+        "test_data": [e.name for e in test_data],
+    }  # fmt: skip
+    return provenance.record(
+        _validated(problem, result, test_data), fmu_sha256=problem.model.sha256, spec=spec,
+        experiments=[*experiments, *test_data], options=options, started=started,
+    )  # fmt: skip
 
 
 def profile(
@@ -217,7 +250,8 @@ def profile(
     executor
         A ``dask.distributed.Client``: branches run as tasks on its workers.
     progress
-        Receives ``fmuid.progress.Progress`` events, one per profile point.
+        Receives ``fmuid.progress.Progress`` events, one per profile point (default: bars
+        under the cell in a Jupyter notebook, nothing elsewhere).
     problem, test_data
         As for :func:`fit` (``validation`` is computed at the profile's best fit).
 
@@ -227,16 +261,32 @@ def profile(
         Intervals, labels, profiles and structural check; ``.to_dict()`` gives the contract JSON.
 
     """
+    started = provenance.now()
+    progress = default_progress(progress)
+    from fmuid.estimation.optimize import fit_problem
+    from fmuid.estimation.study import make_problem
+    from fmuid.profiling.engine import profile_problem
+
     problem = problem or make_problem(fmu, experiments, spec)
+    options = {
+        "stage": "profile", "global_search": spec.global_search, "interface": spec.interface,
+        "confidence": spec.confidence, "workers": workers,
+        "executor": None if executor is None else type(executor).__name__,
+        "fit": "given" if fit is not None else "fitted here",
+        "test_data": [e.name for e in test_data],
+    }  # fmt: skip
     _check_test_data(problem, test_data)
     if fit is None:
         fit = fit_problem(
             problem, global_search=spec.global_search, seed=spec.seed, progress=progress
         )
     result = profile_problem(problem, fit, workers=workers, executor=executor, progress=progress)
-    if not test_data:
-        return result
-    return replace(result, fit=_validated(problem, result.fit, test_data))
+    if test_data:
+        result = replace(result, fit=_validated(problem, result.fit, test_data))
+    return provenance.record(
+        result, fmu_sha256=problem.model.sha256, spec=spec,
+        experiments=[*experiments, *test_data], options=options, started=started,
+    )  # fmt: skip
 
 
 def _check_test_data(problem: Problem, test_data: Sequence[Experiment]) -> None:

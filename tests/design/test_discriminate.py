@@ -91,7 +91,7 @@ def test_discrimination_report_shows_both_predictions_and_the_numbers(proposal, 
     *_, found = proposal
     page = write_discrimination_report(found, tmp_path / "rep").read_text()
     assert (tmp_path / "rep" / "discrimination.png").stat().st_size > 10_000
-    assert 'src="discrimination.png"' in page
+    assert 'src="data:image/png;base64,' in page  # embedded
     assert "output_lag" in page and "input_delay" in page
     assert f"chi2 = {found.expected_chi2:.4g}" in page
     for name, value in found.separation.items():

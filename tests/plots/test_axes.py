@@ -141,8 +141,9 @@ def diagnosis_inputs(msd_fmu: Path) -> tuple[Diagnosis, DiagnosisSeries]:
     series = DiagnosisSeries(problem, outputs, outputs, residuals, residuals)
     diagnosis = Diagnosis(
         mismatch=True, false_alarm=0.01, evidence=(), tests_before=(), tests_after=(),
-        location={"frequency_hz": [1.0, 2.0]},
-        windows=(Window(problem.experiments[1].name, "v", 1.0, 2.0, 3.0),), effect="output_lag",
+        location={"frequency_hz": [1.0, 2.0], "time_windows": [[1.0, 2.0]], "outputs": ["v"],
+                  "experiments": [problem.experiments[1].name]},
+        windows=(Window(problem.experiments[0].name, "x", 0.0, 10.0, 3.0),), effect="output_lag",
         description="", candidates=(), added_parameters={}, chi2_before=1.0, chi2_after=1.0,
         n_data=164, lrt_p_value=None, bic_before=1.0, bic_after=1.0,
         parameters_before={"k": 4.0}, parameters_after={"k": 4.0},
@@ -160,7 +161,9 @@ def test_diagnosis_figures_into_given_axes(diagnosis_inputs):
     assert fit_axes[1, 0].get_title().endswith(": v") and fit_axes[1, 0].get_ylabel() == "v [m/s]"
     assert fit_axes[0, 1].get_title() == f"{b}: x" and len(fit_axes[0, 1].lines) == 3
     assert diagnosis_residual_figure(diagnosis, series, ax=res_axes) is fig
-    assert len(res_axes[1, 1].patches) == 1 and not res_axes[0, 1].patches  # the window of b/v
+    # the location's window on b/v, as the report's table states it; not the residual windows
+    assert len(res_axes[1, 1].patches) == 1 and not res_axes[0, 1].patches
+    assert res_axes[1, 1].patches[0].get_x() == 1.0 and not res_axes[0, 0].patches
     assert diagnosis_spectrum_figure(diagnosis, series, ax=spec_axes.ravel()) is fig
     assert all(_gids(a) == ["spectrum_base"] for a in spec_axes.ravel())
     for draw in (

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+import time
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -20,8 +21,9 @@ from fmuid.plots import (
     trajectory_band_figure,
 )
 from fmuid.profiling.band import trajectory_band
+from fmuid.readable import duration, interval, interval_end
 from fmuid.report.advice import StudyCase, advice_tables, study_verdict
-from fmuid.report.page import HtmlPage, file_slug, fmt, interval, with_unit
+from fmuid.report.page import HtmlPage, file_slug, with_unit
 from fmuid.report.writer import write_report
 
 if TYPE_CHECKING:
@@ -40,7 +42,9 @@ def write_study_report(
     reference_case: tuple[str, float],
     groups: Mapping[str, Sequence[str]],
     grid: str,
-    elapsed: float,
+    started: float,
+    seed: int,
+    progress: Callable[[str], object] = lambda line: None,
 ) -> Path:
     """Write the study's ``index.html`` and a sub-report per dataset.
 
@@ -64,8 +68,13 @@ def write_study_report(
         Compilation figures across designs: title -> parameters (thesis Figs 3.9, 3.10).
     grid
         Name of the grid run.
-    elapsed
-        Wall time of the whole study so far [s].
+    started
+        ``time.perf_counter()`` when the study began: the page states the wall time from then
+        until it is written, drawing included.
+    seed
+        Base seed of the noise draws.
+    progress
+        Receives one line per drawing step.
 
     Returns
     -------
@@ -81,12 +90,7 @@ def write_study_report(
     designs = list(dict.fromkeys(r.design.name for r in runs))
     snrs = sorted({r.snr for r in runs}, reverse=True)
     page.verdict(study_verdict(cases))
-    page.paragraph(
-        f"Thesis section 3.2.3.1 re-run on the FMU {fmu.path.name}: grid '{grid}' "
-        f"({len(designs)} designs x {len(snrs)} SNR levels = {len(runs)} datasets), six tire "
-        f"parameters profiled in each. Elapsed wall time {elapsed:.1f} s on {os.cpu_count()} "
-        f"CPU cores (profiles alone: {sum(r.seconds for r in runs):.1f} s)."
-    )
+    method_at = len(page.blocks)
     ref = next(
         (r for r in runs if r.design.name == reference_case[0] and r.snr == reference_case[1]),
         None,
@@ -153,7 +157,7 @@ def write_study_report(
             "sigma [rad/s]",
             "chi2",
             "n_data",
-            "wall time [s]",
+            "wall time",
             *(with_unit(n, units.get(n)) for n in names),
         ],  # fmt: skip
         [
@@ -163,7 +167,7 @@ def write_study_report(
                 r.sigma,
                 r.result.chi2,
                 r.result.fit.n_data,
-                r.seconds,
+                duration(r.seconds),
                 *(
                     _cell(r.result.parameters[n].ci_simultaneous, r.result.parameters[n].status)
                     for n in names
@@ -175,6 +179,7 @@ def write_study_report(
         caption="68% simultaneous CIs per dataset (PNI: practically, SNI: structurally "
         "non-identifiable)",
     )
+    progress("drawing the compilations")
     page.heading("Compilations")
     for design in designs:
         entries = [
@@ -204,6 +209,7 @@ def write_study_report(
             f"compilation_{title}",
             f"{title} across designs (as thesis Figs 3.9/3.10).",
         )
+    progress("drawing the trajectory band and the fit")
     noisy = min((r for r in runs if r.design.name == designs[0]), key=lambda r: r.snr)
     problem = make_problem(fmu, [noisy.experiment], noisy.spec)
     page.figure(
@@ -218,16 +224,41 @@ def write_study_report(
         f"Fit and weighted residuals, {noisy.design.name}, SNR {noisy.snr:g}.",
     )
     page.heading("Per-dataset reports")
-    for r in runs:
+    for k, r in enumerate(runs, 1):
         slug = file_slug(f"{r.design.slug}_snr{r.snr:g}")
+        progress(f"drawing the per-dataset reports: {k}/{len(runs)}")
         write_report(r.result, directory / slug)
         page.link(
             f"{slug}/index.html", f"{r.design.name}, SNR {r.snr:g}: profiles and parameter paths"
         )
+    elapsed = time.perf_counter() - started
+    page.paragraph(_method(fmu.path.name, grid, designs, snrs, runs, seed, elapsed), at=method_at)
     return page.write()
+
+
+def _method(
+    fmu: str,
+    grid: str,
+    designs: Sequence[str],
+    snrs: Sequence[float],
+    runs: Sequence[DatasetRun],
+    seed: int,
+    elapsed: float,
+) -> str:
+    """Say what was run, how the noise was made and how long it all took."""
+    return (
+        f"Thesis section 3.2.3.1 re-run on the FMU {fmu}: grid '{grid}' ({len(designs)} "
+        f"designs x {len(snrs)} SNR levels = {len(runs)} datasets), six tire parameters "
+        "profiled in each. Each dataset simulates its design's steer input at the nominal "
+        "parameters and adds Gaussian noise to both yaw rates with sigma = max|gam_t| / SNR "
+        "(thesis eq. 3.28): each cell is one noise draw, seeded by (seed, design, SNR level) "
+        f"with seed {seed}. Wall time {duration(elapsed)} on {os.cpu_count()} CPU cores, "
+        f"drawing this report included (profiles alone: "
+        f"{duration(sum(r.seconds for r in runs))})."
+    )
 
 
 def _cell(ci: tuple[float | None, float | None], status: str) -> str:
     tag = {"practically_non_identifiable": " PNI", "structurally_non_identifiable": " SNI"}
-    lo, hi = (fmt(end, 3) if end is not None else "open" for end in ci)
+    lo, hi = (interval_end(end, 3) for end in ci)
     return f"{lo} \u2013 {hi}{tag.get(status, '')}"

@@ -32,6 +32,7 @@ from fmuid.demo.thesis import (
 from fmuid.model.builtin import builtin_fmu
 from fmuid.model.fmu import FmuModel
 from fmuid.progress import Progress
+from fmuid.readable import duration
 
 
 def run_demo(
@@ -92,7 +93,7 @@ def run_demo(
             labels = ", ".join(
                 f"{n} {p.status.split('_')[0]}" for n, p in result.parameters.items()
             )
-            progress(f"{tag}: done in {seconds:.1f} s ({labels})")
+            progress(f"{tag}: done in {duration(seconds)} ({labels})")
             runs.append(DatasetRun(design, snr, sigma, experiment, spec, result, seconds))
     progress("writing the report")
     index = write_study_report(
@@ -105,9 +106,11 @@ def run_demo(
         reference_case=(DESIGNS[0].name, SNRS[0]),
         groups=COMPILATION_GROUPS,
         grid=grid,
-        elapsed=time.perf_counter() - start,
+        started=start,
+        seed=seed,
+        progress=progress,
     )
-    progress(f"demo finished in {time.perf_counter() - start:.1f} s; report: {index}")
+    progress(f"demo finished in {duration(time.perf_counter() - start)}; report: {index}")
     return index
 
 

@@ -153,10 +153,10 @@ class AugmentedPredictor:
         )  # fmt: skip
         y = np.array(y, dtype=float)
         names = list(outputs)
-        for e in lags:
-            columns = [names.index(e.target)] if e.target else list(range(len(names)))
+        for lag in lags:
+            columns = [names.index(lag.target)] if lag.target else list(range(len(names)))
             for j in columns:
-                y[:, j] = first_order_lag(out_time, y[:, j], e.value(params))
+                y[:, j] = first_order_lag(out_time, y[:, j], lag.value(params))
         y = y[rows]
         for e in sorted((e for e in self.effects if e.side == "output"), key=lambda e: e.order):
             if e.target in names and not isinstance(e, OutputLag):

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -80,7 +81,7 @@ class Signals:
         return max(float(np.max(np.abs(values))), 1e-12)
 
 
-def _spec(start: float, lower: float, upper: float, scale: str) -> ParameterSpec:
+def _spec(start: float, lower: float, upper: float, scale: Literal["log", "lin"]) -> ParameterSpec:
     return ParameterSpec(start=start, lower=lower, upper=upper, scale=scale)
 
 

@@ -406,3 +406,10 @@ RENAMED = {
     "gyro_bias": "output_bias",
 }
 """Effect names of earlier versions (result files written by them still load)."""
+
+RENAMED_PARAMETERS = {
+    "tau_sensor": "tau_outputs",
+    "tau_steer": "tau_delta",
+    "offset_steer": "offset_delta",
+}
+"""Added parameter names of the tractor's results in earlier versions."""

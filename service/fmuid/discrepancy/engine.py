@@ -292,7 +292,7 @@ def diagnose_problem(
     concealed = not rt.holm(tests_before, opts.alpha)
     residuals_pass = not rt.holm(tests_after, opts.alpha)
     effect_steps = _steps(steps, estimates, coupling)
-    correction = None if residuals_pass else _correction(aug, final_fit.estimates, None, None)
+    leftover = None if residuals_pass else _correction(aug, final_fit.estimates, None, None)
     return Diagnosis(
         mismatch=True, tests_after=tuple(tests_after), effect=best.candidate.effect,
         description=explain.explained(
@@ -304,6 +304,6 @@ def diagnose_problem(
         second_effect=applied[1].effect if len(applied) > 1 else None,
         indistinguishable=(*tied, *([rival] if rival else [])), absorbed=absorbed_by,
         discriminating_experiment=proposal.to_dict() if proposal else None,
-        generic_correction=correction, effects=effect_steps, validation=tuple(checked),
+        generic_correction=leftover, effects=effect_steps, validation=tuple(checked),
         cost=run.cost(), **common,
     )  # fmt: skip

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,6 +70,7 @@ def refine(
     *,
     free: np.ndarray | None = None,
     options: FitOptions = FitOptions(),
+    on_residuals: Callable[[np.ndarray], None] | None = None,
 ) -> tuple[np.ndarray, float, str]:
     """Trust-region reflective least squares in fitted coordinates within the bounds.
 
@@ -83,6 +84,8 @@ def refine(
         Boolean mask of the parameters to move; the others stay at ``z0``.
     options
         Tolerances and step settings.
+    on_residuals
+        Called with the weighted residuals of every evaluation (e.g. to report progress).
 
     Returns
     -------
@@ -105,7 +108,10 @@ def refine(
     def fun(x: np.ndarray) -> np.ndarray:
         z = z_full.copy()
         z[free] = x
-        return safe_residuals(problem, z)
+        residuals = safe_residuals(problem, z)
+        if on_residuals is not None:
+            on_residuals(residuals)
+        return residuals
 
     n_free = int(free.sum())
     res = least_squares(
@@ -217,9 +223,10 @@ def fit_problem(
         starts.insert(0, global_start(problem, seed, options, progress))
     best: tuple[np.ndarray, float, str] | None = None
     errors = []
-    for z0 in starts:
+    for k, z0 in enumerate(starts, 1):
+        report = RefineProgress(progress, problem, f"start {k}/{len(starts)}") if progress else None
         try:
-            z, chi2, message = refine(problem, z0, options=options)
+            z, chi2, message = refine(problem, z0, options=options, on_residuals=report)
         except FmuError as exc:
             errors.append(str(exc))
             continue
@@ -230,6 +237,34 @@ def fit_problem(
     z, chi2, message = best
     jac = jacobian(problem, z)
     return make_fit_result(problem, z, chi2, jac, message, global_search, t0, sims0)
+
+
+class RefineProgress:
+    """Report the trust-region refinement: evaluations, best chi2 and simulations so far.
+
+    Its events are stage ``"refine"`` with ``total`` 0 (the number of evaluations is not known
+    ahead), at most one every 0.5 s.
+    """
+
+    def __init__(self, progress: ProgressCallback, problem: Problem, label: str):
+        self.progress = progress
+        self.problem = problem
+        self.label = label
+        self.evaluations = 0
+        self.best = float("inf")
+        self.runs0 = problem.simulations
+        self.last = 0.0
+
+    def __call__(self, residuals: np.ndarray) -> None:
+        """Count one evaluation; report now and then."""
+        self.evaluations += 1
+        self.best = min(self.best, float(residuals @ residuals))
+        now = time.monotonic()
+        if now - self.last >= 0.5:
+            self.last = now
+            runs = self.problem.simulations - self.runs0
+            detail = f"{self.label}, chi2 {self.best:.4g}, {runs} simulations"
+            self.progress(Progress("refine", self.evaluations, 0, detail))
 
 
 def jacobian(problem: Problem, z: np.ndarray, step: float = 1e-4) -> np.ndarray:

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fmuid.estimation.space import ParameterSpace
+from fmuid.provenance import Provenance, entry
 
 if TYPE_CHECKING:
     from fmuid.estimation.validation import ValidationEntry
@@ -87,6 +88,7 @@ class FitResult:
     cost: Cost = Cost(0, 0.0)
     fmu_info: dict[str, str] = field(default_factory=dict)
     units: dict[str, str] = field(default_factory=dict)
+    provenance: Provenance | None = None
     validation: tuple[ValidationEntry, ...] = ()
 
     @property
@@ -141,6 +143,7 @@ class FitResult:
             "message": self.message,
             "cost": self.cost.to_dict(),
             "units": dict(self.units),
+            **entry(self.provenance),
             **self.validation_dict(),
         }
 

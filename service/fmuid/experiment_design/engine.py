@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from fmuid import provenance
 from fmuid.data import Spec
 from fmuid.estimation.result import Cost
 from fmuid.experiment_design.checkpoint import Checkpoint, Codec, evaluate_resumably
@@ -34,7 +35,7 @@ from fmuid.experiment_design.verify import Draw, DrawTask, combine
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel
 from fmuid.profiling.engine import thresholds
-from fmuid.progress import Progress, ProgressCallback
+from fmuid.progress import Progress, ProgressCallback, default_progress
 
 log = logging.getLogger(__name__)
 
@@ -128,6 +129,8 @@ def design(
 
     """
     t0 = time.perf_counter()
+    started = provenance.now()
+    progress = default_progress(progress)
     model = FmuModel(resolve_fmu(fmu))
     check_design(space, spec, model)
     n_verify = space.verify_designs if verify_designs is None else verify_designs
@@ -184,7 +187,7 @@ def design(
     best_sens = sens_all[trials.index(best.trial.with_(outputs=tuple(space.outputs)))]
     tradeoffs = _tradeoffs(screen, best, best_sens)
     seconds = time.perf_counter() - t0
-    return DesignResult(
+    result = DesignResult(
         fmu_sha256=model.sha256,
         model_name=model.model_name,
         input_name=space.input,
@@ -196,6 +199,14 @@ def design(
         cost=Cost(sims0, seconds),
         stage_seconds={"screen_seconds": t_screen, "verify_seconds": seconds - t_screen},
     )
+    options = {
+        "stage": "design", "space": space.model_dump(mode="json"), "verify_designs": n_verify,
+        "workers": workers, "executor": None if executor is None else type(executor).__name__,
+    }  # fmt: skip
+    return provenance.record(
+        result, fmu_sha256=model.sha256, spec=spec, options=options, started=started,
+        seed=space.seed,
+    )  # fmt: skip
 
 
 def _reporter(progress: ProgressCallback | None, detail: str) -> Callable[[int, int], None]:

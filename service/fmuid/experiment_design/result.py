@@ -9,6 +9,7 @@ from typing import Any
 from fmuid.estimation.result import Cost
 from fmuid.experiment_design.signals import Trial, trial_from_dict
 from fmuid.experiment_design.verify import Verification
+from fmuid.provenance import Provenance, entry, read
 
 
 @dataclass(frozen=True)
@@ -112,6 +113,7 @@ class DesignResult:
     screened: int
     cost: Cost
     stage_seconds: dict[str, float] = field(default_factory=dict)
+    provenance: Provenance | None = None
 
     @property
     def best(self) -> RankedDesign:
@@ -134,6 +136,7 @@ class DesignResult:
                 **self.cost.to_dict(),
                 **{k: round(v, 3) for k, v in self.stage_seconds.items()},
             },
+            **entry(self.provenance),
         }
 
     @classmethod
@@ -156,6 +159,7 @@ class DesignResult:
             screened=int(data.get("screened", 0)),
             cost=Cost(int(cost.pop("simulations", 0)), float(cost.pop("seconds", 0.0))),
             stage_seconds={k: float(v) for k, v in cost.items()},
+            provenance=read(data),
         )
 
     def to_frame(self) -> Any:

@@ -78,7 +78,7 @@ class Trial:
     def label(self) -> str:
         """Short human-readable name."""
         s = ", ".join(f"{k} {v:.3g}" for k, v in self.settings.items())
-        return f"{self.family} ({s}), {self.duration:g} s at {self.rate_hz:g} Hz"
+        return f"{self.family} ({s}), {self.duration:.3g} s at {self.rate_hz:g} Hz"
 
 
 def trial_from_dict(d: Mapping[str, object]) -> Trial:

@@ -8,17 +8,17 @@ the caller in this process (to checkpoint it and report progress) as soon as it 
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import pickle
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, as_completed
 from typing import Any, TypeVar
 
 from fmuid.model.fmu import FmuFile, FmuModel, load_model
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.profiling.parallel import PickledTask
-from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
+from fmuid.profiling.pool_guard import die_with_pool_owner
+from fmuid.profiling.worker_pool import local_pool
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -94,21 +94,11 @@ def _run_pool(
     n: int,
     finished: Callable[[int, R], None],
 ) -> None:
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(["fmuid.profiling.forkserver_guard", __name__])
-    os.environ[POOL_PARENT_ENV] = str(os.getpid())
-    pool = ProcessPoolExecutor(
-        n,
-        mp_context=ctx,
-        initializer=_init_worker,
-        initargs=(os.getpid(), model.file, unreliable),
-    )
-    try:
+    initargs = (os.getpid(), model.file, unreliable)
+    with local_pool(n, _init_worker, initargs, preload=[__name__]) as pool:
         futures: dict[Future[R], int] = {pool.submit(evaluate, t): k for k, t in enumerate(tasks)}
         for future in as_completed(futures):
             finished(futures[future], future.result())
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _run_dask(

@@ -226,6 +226,7 @@ class Simulator(SimulatorBase):
         plan, fine = self._plan(input_time, input_values, inputs, output_time, feedback)
         instance = self._start()
         t0 = plan.times[0]
+        instance.setup_experiment(t0, None)
         if par.size:
             instance.set(par, list(params.values()), None)
         instance.enter_initialization(t0, None)
@@ -321,9 +322,10 @@ class Simulator(SimulatorBase):
     ) -> tuple[np.ndarray, float | None]:  # fmt: skip
         instance = self._start()
         t0 = plan.times[0]
+        cosim = self.model.is_cosimulation
+        instance.setup_experiment(t0, None if cosim else RTOL)
         if par.size:
             instance.set(par, values, None)
-        cosim = self.model.is_cosimulation
         instance.enter_initialization(t0, None if cosim else RTOL)
         if inputs.size:
             instance.set(inputs, plan.value[0].tolist(), t0)

@@ -8,7 +8,9 @@ from typing import TypeAlias
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.axis import Axis
 from matplotlib.figure import Figure
+from matplotlib.ticker import LogFormatter
 
 from fmuid.estimation.space import value_to_z
 
@@ -127,3 +129,14 @@ def figure_of(ax: Axes) -> Figure:
     if not isinstance(fig, Figure):
         raise ValueError("the axes belong to no figure")
     return fig
+
+
+def plain_log_ticks(axis: Axis) -> None:
+    """Label a log axis in plain text (``100``, ``0.01``, ``1e+05``), not in math text.
+
+    Matplotlib's default log labels are math text (``10^{2}`` between dollar signs), which
+    reads raw wherever math text is off: the report writer turns it off so that a ``$`` in a
+    name stays text.
+    """
+    axis.set_major_formatter(LogFormatter())
+    axis.set_minor_formatter(LogFormatter())

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from fmuid.plots._common import AxesArg, panels
+from fmuid.plots._common import AxesArg, panels, plain_log_ticks
 from fmuid.profiling.result import ProfileResult
 
 BAR_COLOR = "tab:red"
@@ -216,6 +216,7 @@ def _draw_panel(ax: Axes, entries: Sequence[CiEntry]) -> None:
         )
     if entries and entries[0].scale == "log":
         ax.set_xscale("log")
+        plain_log_ticks(ax.xaxis)
     if entries:
         lo, hi = min(e.lower for e in entries), max(e.upper for e in entries)
         if entries[0].scale == "log":

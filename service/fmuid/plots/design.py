@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 from fmuid.experiment_design.discriminate import Discrimination
 from fmuid.experiment_design.result import DesignResult
 from fmuid.experiment_design.signals import input_signal
-from fmuid.plots._common import AxesArg, panels
+from fmuid.plots._common import AxesArg, panels, plain_log_ticks
 
 
 def widths_figure(result: DesignResult, *, ax: AxesArg = None, top: int = 4) -> Figure:
@@ -55,6 +55,7 @@ def widths_figure(result: DesignResult, *, ax: AxesArg = None, top: int = 4) -> 
             panel.plot(x + k * width, ver, "x", color="black", gid="verified")
     panel.set_xticks(x + 0.4 - width / 2, names)
     panel.set_yscale("log")
+    plain_log_ticks(panel.yaxis)
     panel.set_ylabel("simultaneous CI width [decades]")
     panel.set_title("bars: Fisher prediction, x: profile median")
     panel.legend(fontsize="small")

@@ -17,7 +17,7 @@ from scipy import stats
 from fmuid.discrepancy.residual_tests import FALSE_ALARM, Series, periodogram
 from fmuid.discrepancy.result import Diagnosis
 from fmuid.discrepancy.series import DiagnosisSeries
-from fmuid.plots._common import AxesArg, panels, unit_label
+from fmuid.plots._common import AxesArg, panels, plain_log_ticks, unit_label
 
 SMOOTH = 5
 """Periodogram ordinates averaged in the spectrum figure (as in the band test)."""
@@ -40,19 +40,23 @@ def diagnosis_figures(diagnosis: Diagnosis, series: DiagnosisSeries) -> dict[str
         :func:`diagnosis_spectrum_figure`, each in a new figure.
     """
     return {
-        "fit": diagnosis_fit_figure(series),
+        "fit": diagnosis_fit_figure(series, augmented=bool(diagnosis.added_parameters)),
         "residuals": diagnosis_residual_figure(diagnosis, series),
         "spectrum": diagnosis_spectrum_figure(diagnosis, series),
     }
 
 
-def diagnosis_fit_figure(series: DiagnosisSeries, *, ax: AxesArg = None) -> Figure:
+def diagnosis_fit_figure(
+    series: DiagnosisSeries, *, ax: AxesArg = None, augmented: bool = True
+) -> Figure:
     """Draw the data, the base model's and the augmented model's outputs.
 
     Parameters
     ----------
     series
         What to draw (:func:`fmuid.discrepancy.series.diagnosis_series`).
+    augmented
+        Whether the diagnosis added physics; without, the one model is drawn as ``model``.
     ax
         Draw into these axes instead of a new figure: ``n_outputs * n_experiments`` of them,
         row by row (one row per output, one column per experiment).
@@ -77,16 +81,22 @@ def diagnosis_fit_figure(series: DiagnosisSeries, *, ax: AxesArg = None) -> Figu
             panel = axes[j * len(experiments) + i]
             mask = problem.masks[i][j]
             panel.plot(exp.time[mask], problem.data[i][j], ".", ms=3, color="0.4", label="data")
-            panel.plot(
-                exp.time, series.before[i][output], "--", color="tab:red", label="base model"
-            )
-            panel.plot(exp.time, series.after[i][output], "-", color="tab:blue", label="augmented")
+            if augmented:
+                panel.plot(
+                    exp.time, series.before[i][output], "--", color="tab:red", label="base model"
+                )
+                panel.plot(
+                    exp.time, series.after[i][output], "-", color="tab:blue", label="augmented"
+                )
+            else:
+                panel.plot(exp.time, series.before[i][output], "-", color="tab:red",
+                           label="model")  # fmt: skip
             panel.set_title(f"{exp.name}: {output}", fontsize=9)
             panel.set_xlabel("time [s]")
             panel.set_ylabel(unit_label(output, units.get(output, "")))
     axes[0].legend(fontsize=7)
     if new:
-        fig.suptitle("Fit before and after the augmentation")
+        fig.suptitle("Fit before and after the augmentation" if augmented else "Fit")
     return fig
 
 
@@ -95,10 +105,13 @@ def diagnosis_residual_figure(
 ) -> Figure:
     """Draw the weighted residuals before and after the augmentation, the located windows shaded.
 
+    The shaded windows are those of ``diagnosis.location`` (what the report's location table
+    states), on the panels of the experiments and outputs it names.
+
     Parameters
     ----------
     diagnosis
-        The result of ``fmuid.diagnose`` (its windows and added parameters).
+        The result of ``fmuid.diagnose`` (its location and added parameters).
     series, ax
         As for :func:`diagnosis_fit_figure`: what to draw, and optionally the axes to draw
         into (one per output and experiment, row by row).
@@ -110,11 +123,15 @@ def diagnosis_residual_figure(
         number of axes is a ``ValueError``.
 
     """
+    where = diagnosis.location or {}
+    spans = where.get("time_windows") or []
 
     def draw(panel: Axes, s: Series, after: Series | None) -> None:
-        for w in diagnosis.windows:
-            if w.experiment == s.experiment and w.output == s.output:
-                panel.axvspan(w.start, w.end, color="gold", alpha=0.4, lw=0, gid="window")
+        if s.experiment in (where.get("experiments") or []) and s.output in (
+            where.get("outputs") or []
+        ):
+            for start, end in spans:
+                panel.axvspan(start, end, color="gold", alpha=0.4, lw=0, gid="window")
         for curve, color, label in _curves(s, after):
             panel.plot(curve.time, curve.residuals, ".-", ms=2, lw=0.5, color=color, label=label)
         panel.axhline(0, color="k", lw=0.5)
@@ -153,6 +170,7 @@ def diagnosis_spectrum_figure(
             n_freq = n_freq or len(power)
             smooth = np.convolve(power, np.ones(SMOOTH) / SMOOTH, mode="same")
             panel.semilogy(freq, smooth, color=color, label=label, gid=f"spectrum_{label}")
+        plain_log_ticks(panel.yaxis)
         k = max(1, n_freq // SMOOTH)
         level = stats.gamma.isf(FALSE_ALARM / k, SMOOTH, scale=1.0 / SMOOTH)
         panel.axhline(1.0, color="k", lw=0.8, label="white-noise floor")

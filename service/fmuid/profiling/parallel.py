@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import os
 import pickle
 import queue
 import tempfile
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -20,8 +21,11 @@ from fmuid.estimation.problem import Problem
 from fmuid.model.fmu import FmuFile, FmuModel, load_model
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.profiling.branch import BranchResult, settle_branch
-from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
+from fmuid.profiling.pool_guard import die_with_pool_owner
 from fmuid.profiling.walk import WalkOptions
+from fmuid.profiling.worker_pool import local_pool
+
+log = logging.getLogger(__name__)
 
 _PROGRESS_QUEUE: Any = None
 
@@ -128,25 +132,24 @@ def run_branches(
 
             out.append(task.walk(report))
         return out
-    # forkserver, not fork: this process may have threads (BLAS, a job's watchdog); the server
-    # dies with this process, and its workers with it (see fmuid.profiling.pool_guard)
     model = tasks[0].problem.model
     unreliable = get_simulator(model).reset_reliable is False
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(["fmuid.profiling.forkserver_guard", __name__])
-    os.environ[POOL_PARENT_ENV] = str(os.getpid())
-    progress_queue = ctx.Queue()
-    with ProcessPoolExecutor(
-        n,
-        mp_context=ctx,
-        initializer=_init_worker,
-        initargs=(progress_queue, os.getpid(), model.file, unreliable),
-    ) as pool:
+    progress_queue = multiprocessing.get_context("forkserver").Queue()
+    initargs = (progress_queue, os.getpid(), model.file, unreliable)
+    with local_pool(n, _init_worker, initargs, preload=[__name__]) as pool:
         futures: list[Future[BranchResult]] = [pool.submit(run_branch, t) for t in tasks]
         pending = set(futures)
-        while pending:
-            _, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-            _drain(progress_queue, on_point)
+        try:
+            while pending:
+                _, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                _drain(progress_queue, on_point)
+        except KeyboardInterrupt:
+            log.warning(
+                "profile interrupted: %d of %d branches had finished; nothing is kept",
+                len(futures) - len(pending),
+                len(futures),
+            )
+            raise
         _drain(progress_queue, on_point)
         return [f.result() for f in futures]
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from fmuid.estimation.result import Cost, FitResult
+from fmuid.provenance import Provenance, entry
 
 IDENTIFIABLE = "identifiable"
 PRACTICALLY_NON_IDENTIFIABLE = "practically_non_identifiable"
@@ -169,6 +170,7 @@ class ProfileResult:
     cost: Cost
     extra: dict[str, Any] = field(default_factory=dict)
     checks: dict[str, Any] = field(default_factory=dict)
+    provenance: Provenance | None = None
 
     @property
     def chi2(self) -> float:
@@ -198,6 +200,7 @@ class ProfileResult:
             "checks": self.checks,
             "cost": self.cost.to_dict(),
             "units": dict(self.fit.units),
+            **entry(self.provenance),
             **self.fit.validation_dict(),
         }
 

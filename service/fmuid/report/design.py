@@ -10,7 +10,8 @@ from pathlib import Path
 from fmuid.experiment_design.discriminate import Discrimination
 from fmuid.experiment_design.result import DesignResult
 from fmuid.plots.design import discrimination_figure, widths_figure
-from fmuid.report.page import HtmlPage, fmt, interval
+from fmuid.readable import duration, interval
+from fmuid.report.page import HtmlPage, fmt
 
 
 def discrimination_section(page: HtmlPage, result: Discrimination) -> None:
@@ -60,8 +61,8 @@ def write_design_report(result: DesignResult, directory: Path) -> Path:
     page.paragraph(
         f"Recommended: {best.trial.label}, sensors {', '.join(best.trial.outputs)}; "
         f"{result.screened} designs screened by {result.criterion}-optimal Fisher information "
-        f"in {result.stage_seconds.get('screen_seconds', 0):.1f} s, the best verified by "
-        f"profiles in {result.stage_seconds.get('verify_seconds', 0):.1f} s."
+        f"in {duration(result.stage_seconds.get('screen_seconds', 0))}, the best verified by "
+        f"profiles in {duration(result.stage_seconds.get('verify_seconds', 0))}."
     )
     for c in result.not_identifiable_by_any:
         page.paragraph(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 from typing import Any
 
 from fmuid.discrepancy.catalogue import study_catalogue
@@ -13,8 +14,9 @@ from fmuid.estimation.problem import Problem
 from fmuid.experiment_design.discriminate import discrimination_from_dict
 from fmuid.plots import diagnosis_figures
 from fmuid.plots.levels import level_figure
+from fmuid.readable import interval, p_text, p_value
 from fmuid.report.design import discrimination_section
-from fmuid.report.page import HtmlPage, fmt, interval
+from fmuid.report.page import Cell, HtmlPage, fmt
 
 logger = logging.getLogger(__name__)
 
@@ -37,9 +39,26 @@ FIGURE_CAPTIONS = {
     "(binned means and their standard errors).",
 }
 
+PLAIN_CAPTIONS = {
+    "fit": "Data and the fitted model, per experiment and output.",
+    "residuals": "Weighted residuals of the fitted model; shaded: the located time windows.",
+    "spectrum": "Residual periodogram against the white-noise floor; shaded: the located band.",
+    "levels": FIGURE_CAPTIONS["levels"],
+}
+"""Captions when nothing was added (no augmented model to compare)."""
+
 
 def _params(values: dict[str, Any], units: dict[str, str]) -> str:
     return ", ".join(f"{k} = {fmt(v)}{_space(units.get(k))}" for k, v in values.items())
+
+
+def _readable(text: object) -> str:
+    """Return a sentence with a p-value that underflowed to zero written ``p < 1e-300``."""
+    return re.sub(r"\bp = 0(?![.\d])", p_text(0.0), str(text or ""))
+
+
+def _p(value: float | None) -> Cell:
+    return Cell(p_value(value, 3), "num")
 
 
 def _space(unit: str | None) -> str:
@@ -72,7 +91,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
         page.table(
             ["equally good effect", "parameters", "chi2", "test", "p-value"],
             [[t["effect"], _params(t.get("parameters", {}), units), t.get("chi2"),
-              str(t.get("test", "")).replace("_", " "), t.get("p_value")] for t in ties],
+              str(t.get("test", "")).replace("_", " "), _p(t.get("p_value"))] for t in ties],
             caption="Explanations this data cannot tell apart from the named one",
         )  # fmt: skip
     absorbed = d.get("absorbed") or {}
@@ -97,7 +116,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
         page.table(
             ["test", "where", "p-value"],
             [
-                [TEST_NAMES.get(e["test"], e["test"]), _where(e), e.get("p_value")]
+                [TEST_NAMES.get(e["test"], e["test"]), _where(e), _p(e.get("p_value"))]
                 for e in d["evidence"]
             ],  # fmt: skip
             caption="Evidence of the mismatch (tests rejected at the family-wise level)",
@@ -111,8 +130,8 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
                     _params(c.get("parameters", {}), units),
                     c.get("chi2"),
                     c.get("statistic"),
-                    c.get("p_value"),
-                    c.get("p_adjusted"),
+                    _p(c.get("p_value")),
+                    _p(c.get("p_adjusted")),
                     c.get("stage", 1),
                 ]
                 for c in d["candidates"]
@@ -149,17 +168,44 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
     units.update(d.get("units") or {})
     added = d.get("added_parameters") or {}
     units.update({n: a["unit"] for n, a in added.items() if a.get("unit")})
-    page.verdict([d.get("verdict") or verdict(d), str(d.get("description") or "")])
-    effect = d.get("effect")
+    page.verdict([_readable(d.get("verdict") or verdict(d)), _readable(d.get("description"))])
     page.heading("Summary")
+    if d.get("mismatch"):
+        _mismatch_summary(page, d, units)
+    else:
+        _no_mismatch_summary(page, d, units)
+    _effects_and_validation(page, d)
+    _tables(page, d, units)
+    _whiteness(page, d)
+    _settling_test(page, d.get("discriminating_experiment"))
+    if problem is None:
+        return
+    try:
+        figures = diagnosis_figures(diagnosis, diagnosis_series(diagnosis, problem))
+    except FmuidError as error:
+        logger.warning("diagnosis figures not drawn: %s", error)
+        page.paragraph(f"Figures not drawn: {error}", note=True)
+        return
+    levels = (d.get("location") or {}).get("levels")
+    if levels:
+        figures["levels"] = level_figure(levels)
+    captions = FIGURE_CAPTIONS if d.get("added_parameters") else PLAIN_CAPTIONS
+    page.heading("Figures")
+    for name, fig in figures.items():
+        page.figure(fig, f"diagnose_{name}", captions.get(name, name))
+
+
+def _mismatch_summary(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
+    """Add the numbers, the location and the parameters before and after the augmentation."""
+    effect = d.get("effect")
     page.table(
         ["quantity", "value"],
         [
-            ["mismatch", "yes" if d.get("mismatch") else "no"],
+            ["mismatch", "yes"],
             ["effect", effect if effect is not None else "none"],
             ["chi2 before", d.get("chi2_before")],
             ["chi2 after", d.get("chi2_after")],
-            ["likelihood-ratio p-value", d.get("lrt_p_value")],
+            ["likelihood-ratio p-value", _p(d.get("lrt_p_value"))],
             ["number of data", d.get("n_data")],
             ["family-wise false-alarm level", d.get("false_alarm")],
         ],
@@ -185,24 +231,26 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
         table_id="summary",
         caption="Free parameters before and after the augmentation",
     )
-    _effects_and_validation(page, d)
-    _tables(page, d, units)
-    _whiteness(page, d)
-    _settling_test(page, d.get("discriminating_experiment"))
-    if problem is None:
-        return
-    try:
-        figures = diagnosis_figures(diagnosis, diagnosis_series(diagnosis, problem))
-    except FmuidError as error:
-        logger.warning("diagnosis figures not drawn: %s", error)
-        page.paragraph(f"Figures not drawn: {error}", note=True)
-        return
-    levels = (d.get("location") or {}).get("levels")
-    if levels:
-        figures["levels"] = level_figure(levels)
-    page.heading("Figures")
-    for name, fig in figures.items():
-        page.figure(fig, f"diagnose_{name}", FIGURE_CAPTIONS.get(name, name))
+
+
+def _no_mismatch_summary(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
+    """Add the fit's numbers and estimates: nothing was located or added."""
+    page.table(
+        ["quantity", "value"],
+        [
+            ["mismatch", "no"],
+            ["chi2", d.get("chi2_before")],
+            ["number of data", d.get("n_data")],
+            ["family-wise false-alarm level", d.get("false_alarm")],
+        ],
+        table_id="diagnosis",
+    )
+    page.table(
+        ["parameter", "unit", "estimate"],
+        [[n, units.get(n, "\u2014"), v.get("before")] for n, v in d.get("parameters", {}).items()],
+        table_id="summary",
+        caption="Free parameters (the fit the tests were run on)",
+    )
 
 
 def _effects_and_validation(page: HtmlPage, d: dict[str, Any]) -> None:
@@ -213,7 +261,7 @@ def _effects_and_validation(page: HtmlPage, d: dict[str, Any]) -> None:
             ["step", "effect", "what it is", "chi2 before", "chi2 after", "p-value"],
             [
                 [k + 1, s["effect"], s["description"], s["chi2_before"], s["chi2_after"],
-                 s["p_value"]]
+                 _p(s["p_value"])]
                 for k, s in enumerate(steps)
             ],
             caption="Effects added one after another (forward selection)",
@@ -257,8 +305,15 @@ def _whiteness(page: HtmlPage, d: dict[str, Any]) -> None:
     after = d.get("whiteness_after") or {}
     if not before:
         return
+    if not d.get("added_parameters"):
+        page.table(
+            ["experiment / output", "Ljung-Box p"],
+            [[k.replace("/", " / "), _p(v)] for k, v in before.items()],
+            caption="Are the weighted residuals white? (small p: structure left in them)",
+        )
+        return
     page.table(
         ["experiment / output", "Ljung-Box p before", "Ljung-Box p after"],
-        [[k.replace("/", " / "), v, after.get(k)] for k, v in before.items()],
+        [[k.replace("/", " / "), _p(v), _p(after.get(k))] for k, v in before.items()],
         caption="Are the weighted residuals white? (small p: structure left in them)",
     )

@@ -1,7 +1,9 @@
-"""Self-contained HTML pages from the package's jinja2 templates, PNG figures beside them."""
+"""Self-contained HTML pages from the package's jinja2 templates, their PNG figures embedded."""
 
 from __future__ import annotations
 
+import base64
+import io
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -27,7 +29,7 @@ def environment() -> jinja2.Environment:
 
 
 def fmt(value: object, digits: int = 4) -> str:
-    """Format a cell value: numbers to ``digits`` significant digits, ``None`` as a dash.
+    """Format a cell value: numbers to ``digits`` significant digits, ``None`` or nan as a dash.
 
     Mappings read ``key = value; ...`` and sequences ``a, b``, so that no Python literal
     reaches a page.
@@ -44,18 +46,11 @@ def fmt(value: object, digits: int = 4) -> str:
         return str(value)
     if isinstance(value, float):
         if math.isnan(value):
-            return "nan"
+            return "\u2014"
         if math.isinf(value):
             return "\u221e" if value > 0 else "\u2212\u221e"
         return f"{value:.{digits}g}"
     return str(value)
-
-
-def interval(ends: Sequence[float | None], digits: int = 4) -> str:
-    """Format a confidence interval; a null end shows as an unbounded one."""
-    lo = "\u2212\u221e" if ends[0] is None else fmt(ends[0], digits)
-    hi = "+\u221e" if ends[1] is None else fmt(ends[1], digits)
-    return f"[{lo}, {hi}]"
 
 
 def with_unit(label: str, unit: str | None) -> str:
@@ -100,9 +95,10 @@ class HtmlPage:
         """Add the highlighted verdict box (one paragraph per line)."""
         self.blocks.append({"kind": "verdict", "lines": [str(line) for line in lines if line]})
 
-    def paragraph(self, text: str, *, note: bool = False) -> None:
-        """Add a paragraph; ``note`` highlights it."""
-        self.blocks.append({"kind": "paragraph", "text": text, "note": note})
+    def paragraph(self, text: str, *, note: bool = False, at: int | None = None) -> None:
+        """Add a paragraph; ``note`` highlights it; ``at`` puts it before block number ``at``."""
+        block = {"kind": "paragraph", "text": text, "note": note}
+        self.blocks.insert(len(self.blocks) if at is None else at, block)
 
     def bullets(self, items: Sequence[str], *, css_class: str = "") -> None:
         """Add a bulleted list."""
@@ -132,7 +128,11 @@ class HtmlPage:
         )
 
     def figure(self, fig: Figure, name: str, caption: str) -> Path:
-        """Save ``fig`` as ``<name>.png`` beside the page and show it with ``caption``.
+        """Show ``fig`` with ``caption``, embedded in the page; also save it as ``<name>.png``.
+
+        The page carries the PNG as a data URI, so that it needs no other file (a saved page
+        keeps its figures, a token-protected page needs no signed image links); the file
+        beside it is for whoever wants the figure alone.
 
         Returns
         -------
@@ -145,8 +145,11 @@ class HtmlPage:
             stem += "_"
         self._files.add(f"{stem}.png")
         path = self.directory / f"{stem}.png"
-        fig.savefig(path, dpi=self.dpi)
-        self.blocks.append({"kind": "figure", "src": path.name, "caption": caption})
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format="png", dpi=self.dpi)
+        path.write_bytes(buffer.getvalue())
+        src = "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
+        self.blocks.append({"kind": "figure", "src": src, "caption": caption})
         return path
 
     def write(self) -> Path:

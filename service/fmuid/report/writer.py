@@ -21,8 +21,9 @@ from fmuid.plots import (
 )
 from fmuid.profiling.band import trajectory_band
 from fmuid.profiling.result import ParameterProfile, ProfileResult
+from fmuid.readable import duration, interval
 from fmuid.report.diagnosis import diagnosis_sections
-from fmuid.report.page import HtmlPage, fmt, interval
+from fmuid.report.page import HtmlPage, fmt
 from fmuid.report.verdict import profile_verdict, quality_text
 
 if TYPE_CHECKING:
@@ -243,7 +244,7 @@ def _study_numbers(
     rows += [
         ["global search", fit.global_search],
         ["simulations", int(cost["simulations"])],
-        ["wall time [s]", float(cost["seconds"])],
+        ["wall time", duration(float(cost["seconds"]))],
     ]
     page.table(["quantity", "value"], rows, table_id="study", caption="Study")
 
