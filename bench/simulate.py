@@ -3,8 +3,9 @@
 1. Per-sample cost of the co-simulation master loop, native (C, :mod:`fmuid.model.native`)
    and Python (the reference), on long records with an input sample at every output sample
    (610 Hz, as the Silverbox recordings): msd on 4,000 and 65,062 samples, the tractor on
-   4,000, Reference-FMUs (Feedthrough FMI 2.0 with 1 ms midpoint sub-steps, VanDerPol FMI 3.0)
-   when ../shared/reference-fmus exists; with the largest difference between the two loops.
+   4,000, msd with feedback terms closed around it (the feedback loop), Reference-FMUs
+   (Feedthrough FMI 2.0 with 1 ms midpoint sub-steps, VanDerPol FMI 3.0) when
+   ../shared/reference-fmus exists; with the largest difference between the two loops.
 2. Median wall time of one 10 s run per FMU kind: the built-in tractor (fmuid Simulator vs
    fmpy.simulate_fmu, and hosted as an FMU with an unreliable reset: a fresh instance per run in
    a simulation process replaced every 50 runs) and the Reference-FMUs (FMI 2.0/3.0,
@@ -28,6 +29,7 @@ import fmpy
 import numpy as np
 
 from fmuid.model.builtin import builtin_fmu
+from fmuid.model.feedback import Feedback, FeedbackTerm
 from fmuid.model.host import HostedSimulator
 from fmuid.model.simulator import Simulator
 
@@ -57,20 +59,29 @@ FOREIGN = [  # (file, interface, inputs, outputs)
 
 RATE = 610.0
 """Sample rate [Hz] of the per-sample table (the Silverbox recordings')."""
-LOOP_CASES = [  # (label, FMU: built-in name or Reference-FMU file, input, outputs, samples)
-    ("msd", "msd", "f", ["x", "v"], 4000),
-    ("msd", "msd", "f", ["x", "v"], 65062),
-    ("tractor_implement", "tractor_implement", "delta", ["gam_t", "gam_i"], 4000),
+FRICTION = Feedback(
+    (
+        FeedbackTerm("f", "x", False, "power", -3.0, 3),
+        FeedbackTerm("f", "v", False, "tanh", -0.3, 0.05),
+    ),
+    1e-3,
+)
+"""A cubic spring and Coulomb friction closed around msd, steps of at most 1 ms."""
+LOOP_CASES = [  # (label, built-in name or Reference-FMU file, input, outputs, samples, feedback)
+    ("msd", "msd", "f", ["x", "v"], 4000, None),
+    ("msd", "msd", "f", ["x", "v"], 65062, None),
+    ("msd + feedback, 1 ms steps", "msd", "f", ["x", "v"], 4000, FRICTION),
+    ("tractor_implement", "tractor_implement", "delta", ["gam_t", "gam_i"], 4000, None),
     ("Feedthrough FMI 2.0 CS", "fmi2/Feedthrough.fmu", "Float64_continuous_input",
-     ["Float64_continuous_output"], 4000),
-    ("VanDerPol FMI 3.0 CS", "fmi3/VanDerPol.fmu", None, ["x0", "x1"], 4000),
+     ["Float64_continuous_output"], 4000, None),
+    ("VanDerPol FMI 3.0 CS", "fmi3/VanDerPol.fmu", None, ["x0", "x1"], 4000, None),
 ]  # fmt: skip
 
 
 def loop_rows() -> list[tuple[str, int, float, float, float]]:
     """Per-sample cost [s] of the native and the Python loop, and their largest difference."""
     rows = []
-    for label, fmu, name, outputs, n in LOOP_CASES:
+    for label, fmu, name, outputs, n, feedback in LOOP_CASES:
         path = REFERENCE_DIR / fmu if fmu.endswith(".fmu") else builtin_fmu(fmu)
         if not path.is_file():
             continue
@@ -81,7 +92,7 @@ def loop_rows() -> list[tuple[str, int, float, float, float]]:
         sim = Simulator(path)
         runs = max(3, min(50, 200_000 // n))
         cost, result = [], []
-        run = partial(sim.simulate, {}, t_in, inputs, t, outputs)
+        run = partial(sim.simulate, {}, t_in, inputs, t, outputs, feedback)
         for native in (True, False):
             sim.native = native
             result.append(run())

@@ -109,8 +109,10 @@ def fine_times(output_time: np.ndarray, step: float) -> np.ndarray:
     pieces = np.maximum(np.ceil(gaps / step - 1e-9), 1).astype(int)
     if not np.any(pieces > 1):
         return t
-    extra = [t[k] + gaps[k] * np.arange(1, n) / n for k, n in enumerate(pieces.tolist()) if n > 1]
-    return np.unique(np.concatenate([t, *extra]))
+    j = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+    n = np.repeat(pieces, pieces)
+    extra = np.repeat(t[:-1], pieces) + np.repeat(gaps, pieces) * j / n
+    return np.unique(np.concatenate([t, extra]))
 
 
 def run_feedback(
@@ -173,11 +175,7 @@ def run_feedback(
         except OverflowError:
             g[:] = np.inf
         if not np.all(np.isfinite(g)):
-            raise FmuError(
-                f"the loop closed around the FMU by the feedback terms diverged at t = {t} s "
-                "(outputs or fed-back terms beyond the float range)",
-                function="feedback",
-            )
+            raise diverged(t)
         fill((values[k] + g).tolist())
         if (status := set_inputs()) > 1:  # fmi2SetReal & co.
             raise instance.fail(set_name, status, f"for the inputs at t = {t} s")
@@ -197,6 +195,15 @@ def run_feedback(
         if status > 1:
             return result, instance.step_outcome(status, t)
     return result, None
+
+
+def diverged(t: float) -> FmuError:
+    """Return the error of a loop the feedback terms drove beyond the float range at ``t`` [s]."""
+    return FmuError(
+        f"the loop closed around the FMU by the feedback terms diverged at t = {t} s "
+        "(outputs or fed-back terms beyond the float range)",
+        function="feedback",
+    )
 
 
 def feedback_inputs(

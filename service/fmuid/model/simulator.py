@@ -31,6 +31,7 @@ from fmuid.model.exchange import RTOL, run_model_exchange
 from fmuid.model.feedback import Feedback, feedback_inputs, fine_times, run_feedback
 from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
+from fmuid.model.native import run_native_feedback
 from fmuid.model.plan import RunPlan, make_plan
 
 logger = logging.getLogger(__name__)
@@ -85,7 +86,7 @@ class Simulator(SimulatorBase):
         self.reset_reliable = reset_reliable
         self.native = True
         self._channels: dict[tuple[str, ...], Channels] = {}
-        self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], RunPlan]] = {}
+        self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], Any]] = {}
 
     @property
     def instances(self) -> str:
@@ -181,7 +182,7 @@ class Simulator(SimulatorBase):
         par = self._channels_for(tuple(params), "parameter")
         inputs = self._channels_for(tuple(input_values), "input")
         out = self._channels_for(tuple(outputs), "output")
-        plan = self._plan(input_time, input_values, inputs, output_time)
+        plan, _ = self._plan(input_time, input_values, inputs, output_time)
         values = list(params.values())
         result, stopped = self._run(values, plan, par, inputs, out)
         if stopped is not None:
@@ -216,14 +217,13 @@ class Simulator(SimulatorBase):
                 f"FMU {self.model.model_name}: feedback of outputs into inputs needs the "
                 "co-simulation interface; this FMU is run by model exchange"
             )
-        values_in = feedback_inputs(feedback, input_time, dict(input_values))
         par = self._channels_for(tuple(params), "parameter")
-        inputs = self._channels_for(tuple(values_in), "input")
+        names = tuple(dict.fromkeys([*input_values, *feedback.inputs]))
+        inputs = self._channels_for(names, "input")
         out = self._channels_for(tuple(outputs), "output")
         sources = self._channels_for(feedback.sources, "output")
         t_out = np.asarray(output_time, dtype=float)
-        fine = fine_times(t_out, feedback.step)
-        plan = self._plan(input_time, values_in, inputs, fine)
+        plan, fine = self._plan(input_time, input_values, inputs, output_time, feedback)
         instance = self._start()
         t0 = plan.times[0]
         instance.setup_experiment(t0, None)
@@ -232,9 +232,9 @@ class Simulator(SimulatorBase):
         instance.enter_initialization(t0, None)
         instance.set(inputs, plan.value[0].tolist(), t0)
         instance.call("ExitInitializationMode", when=f"at t = {t0} s")
-        result, stopped = run_feedback(
-            instance, plan, inputs, out, sources, feedback, self.model.can_interpolate_inputs
-        )
+        args = (instance, plan, inputs, out, sources, feedback, self.model.can_interpolate_inputs)
+        done = run_native_feedback(*args) if self.native else None
+        result, stopped = done or run_feedback(*args)
         self._terminated = stopped is not None
         rows = np.searchsorted(fine, t_out)
         if stopped is not None and np.any(np.isnan(result[rows])):
@@ -252,23 +252,31 @@ class Simulator(SimulatorBase):
         input_values: Mapping[str, np.ndarray],
         inputs: Channels,
         output_time: np.ndarray,
-    ) -> RunPlan:
-        """Return the run's plan, reused while the same arrays come back with the same values.
+        feedback: Feedback | None = None,
+    ) -> tuple[RunPlan, np.ndarray]:
+        """Return the run's plan and output grid, reused while the same arrays come back.
 
         A fit simulates each experiment many times with the same time and input arrays; the
         plan costs about as much as a short run. The arrays are compared by value on every hit.
+        With ``feedback`` the output grid is refined to its step (:func:`fine_times`) and its
+        undriven inputs are zero.
         """
         arrays = (input_time, output_time, *input_values.values())
-        key = (tuple(input_values), *map(id, arrays))
+        closed = None if feedback is None else (feedback.step, feedback.inputs)
+        key = (tuple(input_values), closed, *map(id, arrays))
         hit = self._plans.get(key)  # the arrays are kept alive there, so their ids are theirs
         if hit is not None and all(map(np.array_equal, arrays, hit[1])):
             return hit[2]
-        plan = make_plan(input_time, input_values, inputs.variables, output_time)
+        grid = np.asarray(output_time, dtype=float)
+        if feedback is not None:
+            input_values = feedback_inputs(feedback, input_time, dict(input_values))
+            grid = fine_times(grid, feedback.step)
+        plan = make_plan(input_time, input_values, inputs.variables, grid)
         if len(self._plans) >= PLAN_CACHE:
             self._plans.pop(next(iter(self._plans)))
         copies = tuple(np.array(a, dtype=float, copy=True) for a in arrays)
-        self._plans[key] = (arrays, copies, plan)
-        return plan
+        self._plans[key] = (arrays, copies, (plan, grid))
+        return plan, grid
 
     def _check_reset(
         self, first: np.ndarray, values: list[float | str], plan: RunPlan,

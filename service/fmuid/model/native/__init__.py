@@ -1,5 +1,9 @@
 """Compiled master loops, called through ctypes with the FMU's own FMI function pointers.
 
+Two loops: the open co-simulation loop (:func:`run_native_cosimulation`, for
+:func:`fmuid.model.cosim.run_cosimulation`) and the closed loop of feedback terms
+(:func:`run_native_feedback`, for :func:`fmuid.model.feedback.run_feedback`).
+
 The C sources live beside this file and are compiled by gcc on first use (or by
 ``fmuid build-fmus``) into the folder of the built-in FMUs (:func:`fmuid.model.builtin.fmu_dir`),
 named by a hash of the source. Without gcc, or if compiling fails, the Python loops run instead
@@ -8,6 +12,7 @@ reference: the native ones are tested against them to rounding.
 """
 
 from fmuid.model.native.build import native_library
+from fmuid.model.native.feedback import run_native_feedback
 from fmuid.model.native.loop import run_native_cosimulation
 
-__all__ = ["native_library", "run_native_cosimulation"]
+__all__ = ["native_library", "run_native_cosimulation", "run_native_feedback"]

@@ -10,6 +10,7 @@ import os
 import subprocess
 from pathlib import Path
 
+from fmuid.errors import FmuError
 from fmuid.model.builtin import fmu_dir
 
 logger = logging.getLogger(__name__)
@@ -33,15 +34,23 @@ def compile_library(target: Path) -> None:
 
     Raises
     ------
-    OSError, subprocess.CalledProcessError
-        If gcc is missing, the folder is not writable or gcc fails.
+    FmuError
+        If gcc is missing or fails, or the folder is not writable (naming which).
 
     """
-    target.parent.mkdir(parents=True, exist_ok=True)
     partial = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     command = ["gcc", *FLAGS, "-o", str(partial), str(SOURCE), "-lm"]
     try:
-        subprocess.run(command, capture_output=True, text=True, check=True)
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise FmuError(f"cannot write the compiled loop to {target}: {exc}") from exc
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, check=False)
+    except FileNotFoundError as exc:
+        raise FmuError(f"cannot compile {SOURCE}: gcc was not found on PATH") from exc
+    try:
+        if done.returncode != 0:
+            raise FmuError(f"cannot compile {SOURCE}: gcc failed:\n{done.stderr.strip()}")
         os.replace(partial, target)
     finally:
         partial.unlink(missing_ok=True)
@@ -61,10 +70,11 @@ def native_library() -> ctypes.CDLL | None:
             logger.info("compiling the native master loop into %s", path)
             compile_library(path)
         lib = ctypes.CDLL(str(path))
-    except (OSError, subprocess.CalledProcessError) as exc:
-        detail = getattr(exc, "stderr", None) or exc
-        logger.warning("native master loop unavailable (%s); using the Python loop", detail)
+    except (FmuError, OSError) as exc:
+        logger.warning("native master loop unavailable (%s); using the Python loop", exc)
         return None
-    lib.fmuid_cosimulation.restype = ctypes.c_int
+    for function in (lib.fmuid_cosimulation, lib.fmuid_feedback):
+        function.restype = ctypes.c_int
     lib.fmuid_cosimulation.argtypes = [ctypes.c_void_p]
+    lib.fmuid_feedback.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
     return lib

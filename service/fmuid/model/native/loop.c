@@ -7,6 +7,8 @@
  * fmpy loaded. The arithmetic is written in the order of the Python loop (compiled without
  * contraction into fused multiply-adds), so both give the same numbers.
  *
+ * fmuid_feedback is the closed loop of fmuid.model.feedback.run_feedback in the same way.
+ *
  * On a status above Warning the loop stops and says where (FmuidLoop.fail_*); Python builds the
  * error or, for a request to terminate, reads the stop time.
  */
@@ -22,7 +24,16 @@ typedef int (*SetFloat3)(void *, const unsigned *, size_t, const double *, size_
 typedef int (*GetFloat3)(void *, const unsigned *, size_t, double *, size_t);
 typedef int (*DoStep3)(void *, double, double, bool, bool *, bool *, bool *, double *);
 
-enum { CALL_SET = 0, CALL_DERIVATIVES = 1, CALL_GET = 2, CALL_STEP = 3, CALL_SUB_SET = 4 };
+enum {
+    CALL_SET = 0,
+    CALL_DERIVATIVES = 1,
+    CALL_GET = 2,
+    CALL_STEP = 3,
+    CALL_SUB_SET = 4,
+    CALL_GET_SOURCES = 5,
+    DIVERGED = 6
+};
+#define STATUS_DIVERGED 100
 
 /* Mirrored by fmuid.model.native.loop.Loop (ctypes): keep the two in the same order. */
 typedef struct {
@@ -54,6 +65,21 @@ typedef struct {
     bool terminate;               /* FMI 3.0: terminateSimulation of the failed step */
     double last_time;             /* FMI 3.0: lastSuccessfulTime of the failed step */
 } FmuidLoop;
+
+/* Mirrored by fmuid.model.native.feedback.Terms (ctypes): keep the two in the same order. */
+typedef struct {
+    long n_src;
+    const unsigned *src_refs;     /* outputs the terms read */
+    long n_terms;
+    const long *input;            /* index of the input each term is added to */
+    const long *source;           /* index of the source it reads */
+    const int *derivative;        /* 1: the finite-difference rate of the source */
+    const int *kind;              /* 0 power, 1 tanh, 2 dead band */
+    const double *coefficient;
+    const double *shape;          /* whole exponent, width or band */
+    double *level, *previous;     /* n_src each */
+    double *g, *g_prev;           /* n_in each */
+} FmuidTerms;
 
 static int set_values(FmuidLoop *L, const unsigned *refs, long n, const double *v) {
     if (L->fmi3) return ((SetFloat3)L->set_real)(L->component, refs, (size_t)n, v, (size_t)n);
@@ -142,6 +168,78 @@ int fmuid_cosimulation(FmuidLoop *L) {
             status = step(L, t, L->times[k + 1] - t);
             if (status > 1) return failed(L, status, k, CALL_STEP, t);
         }
+    }
+    return 0;
+}
+
+/* One term at x, as fmuid.model.feedback.FeedbackTerm.value computes it. */
+static double term_value(int kind, double coefficient, double shape, double x) {
+    double low, clipped;
+    if (kind == 0) return coefficient * pow(x, shape);
+    if (kind == 1) return coefficient * tanh(x / shape);
+    low = (-shape > x) ? -shape : x;      /* Python's max(x, -band) */
+    clipped = (shape < low) ? shape : low; /* min(.., band) */
+    return coefficient * (x - clipped);
+}
+
+static int get_sources(FmuidLoop *L, FmuidTerms *F) {
+    size_t n = (size_t)F->n_src;
+    if (L->fmi3) return ((GetFloat3)L->get_real)(L->component, F->src_refs, n, F->level, n);
+    return ((GetReal2)L->get_real)(L->component, F->src_refs, n, F->level);
+}
+
+/*
+ * The closed loop: at every grid point read the sources, add the terms to the measured inputs,
+ * set them (and their slopes plus the terms' trend over the previous step), read the outputs,
+ * step. 0 when it ran to the end, else a status (STATUS_DIVERGED for a non-finite term).
+ */
+int fmuid_feedback(FmuidLoop *L, FmuidTerms *F) {
+    double *u = L->work, *y = L->work + L->n_in;
+    long last = L->n_times - 1;
+    double t_prev = L->times[0];
+    int status;
+    for (long k = 0; k <= last; k++) {
+        double t = L->times[k];
+        const double *v = L->value + k * L->n_in, *s = L->slope + k * L->n_in;
+        status = get_sources(L, F);
+        if (status > 1) return failed(L, status, k, CALL_GET_SOURCES, t);
+        for (long i = 0; i < L->n_in; i++) F->g[i] = 0.0;
+        for (long m = 0; m < F->n_terms; m++) {
+            long j = F->source[m];
+            double x = F->level[j];
+            if (F->derivative[m]) x = k ? (F->level[j] - F->previous[j]) / (t - t_prev) : 0.0;
+            F->g[F->input[m]] += term_value(F->kind[m], F->coefficient[m], F->shape[m], x);
+        }
+        for (long i = 0; i < L->n_in; i++) {
+            if (!isfinite(F->g[i])) return failed(L, STATUS_DIVERGED, k, DIVERGED, t);
+            u[i] = v[i] + F->g[i];
+        }
+        status = set_values(L, L->in_refs, L->n_in, u);
+        if (status > 1) return failed(L, status, k, CALL_SET, t);
+        if (L->use_derivatives && L->n_cont) {
+            for (long i = 0; i < L->n_cont; i++) {
+                long c = L->cont_index[i];
+                double trend = k ? (F->g[c] - F->g_prev[c]) / (t - t_prev) : 0.0;
+                u[i] = s[c] + trend;
+            }
+            status = ((SetDer2)L->set_derivatives)(L->component, L->cont_refs, (size_t)L->n_cont,
+                                                   L->orders, u);
+            if (status > 1) return failed(L, status, k, CALL_DERIVATIVES, t);
+        }
+        if (L->row_start[k + 1] > L->row_start[k]) {
+            status = get_values(L, y);
+            if (status > 1) return failed(L, status, k, CALL_GET, t);
+            for (long r = L->row_start[k]; r < L->row_start[k + 1]; r++) {
+                double *row = L->result + L->rows[r] * L->n_out;
+                for (long o = 0; o < L->n_out; o++) row[o] = y[o];
+            }
+        }
+        if (k == last) break;
+        for (long j = 0; j < F->n_src; j++) F->previous[j] = F->level[j];
+        for (long i = 0; i < L->n_in; i++) F->g_prev[i] = F->g[i];
+        t_prev = t;
+        status = step(L, t, L->times[k + 1] - t);
+        if (status > 1) return failed(L, status, k, CALL_STEP, t);
     }
     return 0;
 }

@@ -21,7 +21,9 @@ from fmuid.model.plan import RunPlan
 
 _P = ctypes.c_void_p
 _LONG = ctypes.c_long
-CALL_SET, CALL_DERIVATIVES, CALL_GET, CALL_STEP, CALL_SUB_SET = range(5)
+LOOPS_KEPT = 32
+"""Loops kept per input channels (one per run plan and outputs, typically)."""
+CALL_SET, CALL_DERIVATIVES, CALL_GET, CALL_STEP, CALL_SUB_SET, CALL_GET_SOURCES, DIVERGED = range(7)
 
 
 class Loop(ctypes.Structure):
@@ -50,14 +52,68 @@ def _pointer(array: np.ndarray | ctypes.Array) -> int:  # type: ignore[type-arg]
     return ctypes.addressof(array)
 
 
-def supports(instance: Instance, inputs: Channels, outputs: Channels) -> bool:
-    """Whether the native loop can run these channels on this instance."""
-    return (
-        instance.model.is_cosimulation
-        and (inputs.all_float or inputs.size == 0)
-        and (outputs.all_float or outputs.size == 0)
-        and native_library() is not None
-    )
+def supports(instance: Instance, *channels: Channels) -> bool:
+    """Whether the native loops can run on this instance with these channels (all float)."""
+    return instance.model.is_cosimulation and all(c.all_float or c.size == 0 for c in channels)
+
+
+def build_loop(
+    instance: Instance,
+    plan: RunPlan,
+    inputs: Channels,
+    outputs: Channels,
+    derivatives: bool,
+    sub_step: float | None,
+) -> tuple[Loop, np.ndarray, list[object]]:
+    """Return a :class:`Loop` for one run (built once per plan and channels, then reused).
+
+    ``derivatives``: set input slopes (fmi2SetRealInputDerivatives); ``sub_step``: longest
+    sub-step of moving intervals (None: never sub-step). Returns the loop, the result array it
+    writes (NaN where no row is read) and the objects it points into (keep them alive).
+    """
+    key = f"native {id(plan)} {id(outputs)} {id(instance)} {derivatives} {sub_step}"
+    cached = inputs.helpers.get(key)  # holds plan, outputs and instance: their ids stay theirs
+    if cached is None:
+        kept = [k for k in inputs.helpers if k.startswith("native ")]
+        if len(kept) >= LOOPS_KEPT:
+            for old in kept:
+                del inputs.helpers[old]
+        cached = (plan, outputs, instance, *_new_loop(instance, plan, inputs, outputs,
+                                                      derivatives, sub_step))  # fmt: skip
+        inputs.helpers[key] = cached
+    loop, alive = cached[3], cached[4]
+    component = instance.component
+    loop.component = component.value if isinstance(component, _P) else component
+    result = np.full((plan.n_rows, outputs.size), np.nan)
+    loop.result = _pointer(result)
+    return loop, result, alive
+
+
+def _new_loop(
+    instance: Instance, plan: RunPlan, inputs: Channels, outputs: Channels, derivatives: bool,
+    sub_step: float | None,
+) -> tuple[Loop, list[object]]:  # fmt: skip
+    p = instance.prefix
+    grid = plan.arrays
+    work = np.empty(inputs.size + outputs.size)
+    cont = inputs.continuous
+    cont_index = np.array(cont, dtype=np.int64)
+    cont_refs = inputs.subset(cont).refs
+    orders = np.ones(len(cont), dtype=np.int32)
+    float_type = "Float64" if instance.v3 else "Real"
+    loop = Loop(
+        None, _address(instance, f"{p}Set{float_type}"),
+        _address(instance, "fmi2SetRealInputDerivatives") if derivatives else None,
+        _address(instance, f"{p}DoStep"), _address(instance, f"{p}Get{float_type}"),
+        int(instance.v3), len(plan.times), _pointer(grid.times), _pointer(grid.value),
+        _pointer(grid.slope), None if sub_step is None else _pointer(grid.moving),
+        inputs.size, _pointer(inputs.refs), len(cont), _pointer(cont_index),
+        _pointer(cont_refs), _pointer(orders), int(derivatives),
+        math.inf if sub_step is None else sub_step, outputs.size,
+        _pointer(outputs.refs), _pointer(grid.row_start), _pointer(grid.rows), None,
+        _pointer(work),
+    )  # fmt: skip
+    return loop, [grid, work, cont_index, cont_refs, orders]
 
 
 def run_native_cosimulation(
@@ -78,44 +134,27 @@ def run_native_cosimulation(
         As the Python loop does, for a call that returns neither OK nor Warning.
 
     """
-    if not supports(instance, inputs, outputs):
-        return None
     lib = native_library()
-    assert lib is not None
-    p = instance.prefix
-    grid = plan.arrays
-    n_times = len(plan.times)
-    result = np.full((plan.n_rows, outputs.size), np.nan)
-    work = np.empty(inputs.size + outputs.size)
-    cont = inputs.continuous
-    cont_index = np.array(cont, dtype=np.int64)
-    cont_refs = inputs.subset(cont).refs
-    orders = np.ones(len(cont), dtype=np.int32)
-    float_type = "Float64" if instance.v3 else "Real"
-    loop = Loop(
-        instance.component.value if isinstance(instance.component, _P) else instance.component,
-        _address(instance, f"{p}Set{float_type}"),
-        _address(instance, "fmi2SetRealInputDerivatives") if input_step is None else None,
-        _address(instance, f"{p}DoStep"), _address(instance, f"{p}Get{float_type}"),
-        int(instance.v3), n_times, _pointer(grid.times), _pointer(grid.value),
-        _pointer(grid.slope), None if input_step is None else _pointer(grid.moving),
-        inputs.size, _pointer(inputs.refs), len(cont), _pointer(cont_index),
-        _pointer(cont_refs), _pointer(orders), int(input_step is None),
-        math.inf if input_step is None else input_step, outputs.size,
-        _pointer(outputs.refs), _pointer(grid.row_start), _pointer(grid.rows),
-        _pointer(result), _pointer(work),
-    )  # fmt: skip
+    if lib is None or not supports(instance, inputs, outputs):
+        return None
+    loop, result, _alive = build_loop(
+        instance, plan, inputs, outputs, input_step is None, input_step
+    )
     status = lib.fmuid_cosimulation(ctypes.byref(loop))  # fmi2DoStep fmi3DoStep (and get/set)
     if not status:
         return result, None
-    return result, _failure(instance, plan, inputs, outputs, loop, status, result)
+    stopped = failure(instance, plan, inputs, outputs, loop, status)
+    following = plan.times[loop.fail_k + 1]
+    if plan.rows_at[loop.fail_k + 1] and stopped >= following - 1e-12 * max(1.0, abs(stopped)):
+        result[plan.rows_at[loop.fail_k + 1]] = instance.read(outputs, following)
+    return result, stopped
 
 
-def _failure(
+def failure(
     instance: Instance, plan: RunPlan, inputs: Channels, outputs: Channels, loop: Loop,
-    status: int, result: np.ndarray,
+    status: int,
 ) -> float:  # fmt: skip
-    """Raise the Python loop's error for the failed call, or return the stop time it asked."""
+    """Raise the Python loop's error for the failed call, or return the stop time asked for."""
     k, call = loop.fail_k, loop.fail_call
     t = plan.times[k]
     if call in (CALL_SET, CALL_SUB_SET):
@@ -126,12 +165,7 @@ def _failure(
     if call == CALL_GET:
         raise instance.fail(outputs.getters[0], status, f"at t = {t} s")
     if not instance.v3:
-        stopped = instance.step_outcome(status, loop.fail_time)
-    elif status == 2 and loop.terminate:
-        stopped = float(loop.last_time)
-    else:
-        raise instance.fail("fmi3DoStep", status, f"in the step from t = {loop.fail_time} s")
-    following = plan.times[k + 1]
-    if plan.rows_at[k + 1] and stopped >= following - 1e-12 * max(1.0, abs(stopped)):
-        result[plan.rows_at[k + 1]] = instance.read(outputs, following)
-    return stopped
+        return instance.step_outcome(status, loop.fail_time)
+    if status == 2 and loop.terminate:
+        return float(loop.last_time)
+    raise instance.fail("fmi3DoStep", status, f"in the step from t = {loop.fail_time} s")
