@@ -79,3 +79,26 @@ def test_bad_terms_and_grids() -> None:
         FeedbackTerm("f", "v", False, "cube", 1.0, 3)
     fine = fine_times(np.array([0.0, 1.0, 1.05]), 0.3)
     assert np.max(np.diff(fine)) <= 0.3 + 1e-12 and {0.0, 1.0, 1.05} <= set(fine.tolist())
+
+
+def test_inputs_between_the_fine_points_keep_a_finite_difference_rate_stable(
+    msd_fmu: Path,
+) -> None:
+    # inputs every 2.5 ms, outputs every 10 ms, steps of at most 2 ms: the grid has intervals of
+    # 0.5 ms, which must not become the baseline of the rate (it blew up before)
+    t_in = np.arange(0.0, 2.0, 0.0025)
+    u = np.sin(3.0 * t_in)
+    t_out = np.arange(0.0, 2.0, 0.01)
+    terms = (FeedbackTerm("f", "x", True, "tanh", FC, WIDTH),)
+    sim = Simulator(msd_fmu)
+    y = sim.simulate({"m": M, "k": K, "b": B}, t_in, {"f": u}, t_out, ["x"],
+                     Feedback(terms, 0.002))  # fmt: skip
+    sim.close()
+
+    def rhs(tt: float, s: np.ndarray) -> list[float]:
+        x, v = s
+        return [v, (np.interp(tt, t_in, u) + FC * np.tanh(v / WIDTH) - B * v - K * x) / M]
+
+    sol = solve_ivp(rhs, (0.0, t_out[-1]), [0.0, 0.0], t_eval=t_out, rtol=1e-10, atol=1e-12,
+                    max_step=0.001)  # fmt: skip
+    assert np.max(np.abs(y[:, 0] - sol.y[0])) < 0.02 * np.max(np.abs(sol.y[0]))

@@ -9,7 +9,9 @@ check it by halving the step (``fmuid.discrepancy`` reports that check).
 
 FMUs that take input derivatives get the measured input's slope plus the feedback's slope over
 the previous step (a linear extrapolation, second order in the step); the others hold the
-value of the step's start time (first order).
+value of the step's start time (first order). Rates and slopes are differences over at least
+half the step (:attr:`Feedback.min_gap`): a grid point nearer the last one (an input sample
+between fine-grid points) keeps the last ones.
 
 Each term is ``coefficient * shape(x)`` with ``x`` an output, or the finite-difference rate of
 an output over the previous step:
@@ -92,6 +94,15 @@ class Feedback:
     step: float
 
     @property
+    def min_gap(self) -> float:
+        """Shortest baseline [s] of a rate or a trend: half the step.
+
+        A grid point closer than this to the last baseline point (an input sample between two
+        fine-grid points) keeps the last rate and trend instead of dividing by a tiny interval.
+        """
+        return 0.5 * self.step
+
+    @property
     def inputs(self) -> tuple[str, ...]:
         """Inputs that receive a term, in first-seen order."""
         return tuple(dict.fromkeys(t.input for t in self.terms))
@@ -159,15 +170,17 @@ def run_feedback(
     derivatives = instance.bind_derivatives(inputs) if interpolate else None
     step = instance.stepper()
     n_in = inputs.size
-    previous = np.zeros(sources.size)
-    g_prev = np.zeros(n_in)
+    previous, rate = np.zeros(sources.size), np.zeros(sources.size)
+    g_prev, trend = np.zeros(n_in), np.zeros(n_in)
     t_prev = times[0]
     last = len(times) - 1
     for k, t in enumerate(times):
         if (status := get_src()) > 1:  # fmi2GetReal & co.
             raise instance.fail(src_name, status, f"at t = {t} s")
         level = np.array(src, dtype=float)
-        rate = (level - previous) / (t - t_prev) if k else np.zeros_like(level)
+        update = k > 0 and t - t_prev >= feedback.min_gap
+        if update:
+            rate = (level - previous) / (t - t_prev)
         g = np.zeros(n_in)
         try:
             for i, j, term in terms:
@@ -176,11 +189,12 @@ def run_feedback(
             g[:] = np.inf
         if not np.all(np.isfinite(g)):
             raise diverged(t)
+        if update:
+            trend = (g - g_prev) / (t - t_prev)
         fill((values[k] + g).tolist())
         if (status := set_inputs()) > 1:  # fmi2SetReal & co.
             raise instance.fail(set_name, status, f"for the inputs at t = {t} s")
         if derivatives is not None:
-            trend = (g - g_prev) / (t - t_prev) if k else np.zeros(n_in)
             derivatives[0]((slopes[k] + trend).tolist())
             if (status := derivatives[1]()) > 1:  # fmi2SetRealInputDerivatives
                 raise instance.fail("fmi2SetRealInputDerivatives", status, f"at t = {t} s")
@@ -190,7 +204,8 @@ def run_feedback(
             result[rows] = out
         if k == last:
             break
-        previous, g_prev, t_prev = level, g, t
+        if k == 0 or update:
+            previous, g_prev, t_prev = level, g, t
         status = step(t, times[k + 1] - t, 1)  # fmi2DoStep (fmi3DoStep)
         if status > 1:
             return result, instance.step_outcome(status, t)

@@ -27,7 +27,8 @@ class Terms(ctypes.Structure):
     _fields_ = [
         ("n_src", ctypes.c_long), ("src_refs", _P), ("n_terms", ctypes.c_long), ("input", _P),
         ("source", _P), ("derivative", _P), ("kind", _P), ("coefficient", _P), ("shape", _P),
-        ("level", _P), ("previous", _P), ("g", _P), ("g_prev", _P),
+        ("level", _P), ("previous", _P), ("g", _P), ("g_prev", _P), ("rate", _P), ("trend", _P),
+        ("min_gap", ctypes.c_double),
     ]  # fmt: skip
 
 
@@ -65,11 +66,11 @@ def run_native_feedback(
         np.array([t.coefficient for t in terms], dtype=np.float64),
         np.array([int(t.shape) if t.kind == "power" else t.shape for t in terms], dtype=float),
         np.zeros(sources.size), np.zeros(sources.size), np.zeros(inputs.size),
-        np.zeros(inputs.size),
+        np.zeros(inputs.size), np.zeros(sources.size), np.zeros(inputs.size),
     ]  # fmt: skip
     spec = Terms(
         sources.size, ctypes.addressof(sources.refs), len(terms),
-        *(int(a.ctypes.data) for a in arrays),
+        *(int(a.ctypes.data) for a in arrays), feedback.min_gap,
     )  # fmt: skip
     loop, result, _alive = build_loop(instance, plan, inputs, outputs, interpolate, None)
     status = lib.fmuid_feedback(ctypes.byref(loop), ctypes.byref(spec))  # fmi2DoStep fmi3DoStep

@@ -79,6 +79,8 @@ typedef struct {
     const double *shape;          /* whole exponent, width or band */
     double *level, *previous;     /* n_src each */
     double *g, *g_prev;           /* n_in each */
+    double *rate, *trend;         /* n_src, n_in: the last differences, held between updates */
+    double min_gap;               /* shortest baseline [s] of a difference (half the step) */
 } FmuidTerms;
 
 static int set_values(FmuidLoop *L, const unsigned *refs, long n, const double *v) {
@@ -198,29 +200,34 @@ int fmuid_feedback(FmuidLoop *L, FmuidTerms *F) {
     long last = L->n_times - 1;
     double t_prev = L->times[0];
     int status;
+    for (long j = 0; j < F->n_src; j++) F->rate[j] = 0.0;
+    for (long i = 0; i < L->n_in; i++) F->trend[i] = 0.0;
     for (long k = 0; k <= last; k++) {
         double t = L->times[k];
         const double *v = L->value + k * L->n_in, *s = L->slope + k * L->n_in;
         status = get_sources(L, F);
         if (status > 1) return failed(L, status, k, CALL_GET_SOURCES, t);
+        int update = k > 0 && t - t_prev >= F->min_gap;
+        if (update)
+            for (long j = 0; j < F->n_src; j++)
+                F->rate[j] = (F->level[j] - F->previous[j]) / (t - t_prev);
         for (long i = 0; i < L->n_in; i++) F->g[i] = 0.0;
         for (long m = 0; m < F->n_terms; m++) {
             long j = F->source[m];
-            double x = F->level[j];
-            if (F->derivative[m]) x = k ? (F->level[j] - F->previous[j]) / (t - t_prev) : 0.0;
+            double x = F->derivative[m] ? F->rate[j] : F->level[j];
             F->g[F->input[m]] += term_value(F->kind[m], F->coefficient[m], F->shape[m], x);
         }
         for (long i = 0; i < L->n_in; i++) {
             if (!isfinite(F->g[i])) return failed(L, STATUS_DIVERGED, k, DIVERGED, t);
             u[i] = v[i] + F->g[i];
+            if (update) F->trend[i] = (F->g[i] - F->g_prev[i]) / (t - t_prev);
         }
         status = set_values(L, L->in_refs, L->n_in, u);
         if (status > 1) return failed(L, status, k, CALL_SET, t);
         if (L->use_derivatives && L->n_cont) {
             for (long i = 0; i < L->n_cont; i++) {
                 long c = L->cont_index[i];
-                double trend = k ? (F->g[c] - F->g_prev[c]) / (t - t_prev) : 0.0;
-                u[i] = s[c] + trend;
+                u[i] = s[c] + F->trend[c];
             }
             status = ((SetDer2)L->set_derivatives)(L->component, L->cont_refs, (size_t)L->n_cont,
                                                    L->orders, u);
@@ -235,9 +242,11 @@ int fmuid_feedback(FmuidLoop *L, FmuidTerms *F) {
             }
         }
         if (k == last) break;
-        for (long j = 0; j < F->n_src; j++) F->previous[j] = F->level[j];
-        for (long i = 0; i < L->n_in; i++) F->g_prev[i] = F->g[i];
-        t_prev = t;
+        if (k == 0 || update) {
+            for (long j = 0; j < F->n_src; j++) F->previous[j] = F->level[j];
+            for (long i = 0; i < L->n_in; i++) F->g_prev[i] = F->g[i];
+            t_prev = t;
+        }
         status = step(L, t, L->times[k + 1] - t);
         if (status > 1) return failed(L, status, k, CALL_STEP, t);
     }
