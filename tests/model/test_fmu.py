@@ -36,7 +36,7 @@ CONTRACT_IO = {
     ),
     "msd": (["f"], ["x", "v"]),
     "msd_parallel": (["f"], ["x", "v"]),
-    "emps": (["q_ref"], ["qm", "vir", "v"]),
+    "emps": (["q_ref", "f_ext"], ["qm", "vir", "v"]),
 }
 
 
