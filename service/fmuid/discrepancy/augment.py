@@ -15,44 +15,16 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import lfilter
 
 from fmuid.data import Experiment
 from fmuid.discrepancy.effects import Effect, InputDelay, OutputLag
+from fmuid.discrepancy.lag import first_order_lag
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.model.feedback import Feedback, fine_times
 from fmuid.model.registry import get_simulator
 
 FINE = 4
 """Fine-grid points per median data interval (input and output lags, clipping, feedback)."""
-
-
-def first_order_lag(time: np.ndarray, values: np.ndarray, tau: float) -> np.ndarray:
-    """Exact first-order lag ``y' = (u - y) / tau`` of a piecewise-linear ``u``, from rest at u[0].
-
-    Parameters
-    ----------
-    time
-        Sample times [s], increasing.
-    values
-        Samples of ``u`` (first axis along time); ``u`` is linear between them.
-    tau
-        Time constant [s], > 0.
-
-    """
-    h = np.diff(time)
-    u = np.asarray(values, dtype=float)
-    if len(h) and np.allclose(h, h[0], rtol=1e-6):
-        a = float(np.exp(-h[0] / tau))
-        b0 = 1.0 - tau / h[0] * (1.0 - a)
-        return u[0] + lfilter([b0, 1.0 - a - b0], [1.0, -a], u - u[0], axis=0)
-    a_k = np.exp(-h / tau)
-    ramp = 1.0 - tau / h * (1.0 - a_k)
-    y = np.empty_like(u)
-    y[0] = u[0]
-    for k in range(len(h)):
-        y[k + 1] = a_k[k] * y[k] + (1.0 - a_k[k]) * u[k] + ramp[k] * (u[k + 1] - u[k])
-    return y
 
 
 def fine_step(time: np.ndarray) -> float:

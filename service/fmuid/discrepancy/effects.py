@@ -25,6 +25,7 @@ from typing import ClassVar
 import numpy as np
 
 from fmuid.discrepancy.knowledge import AddedParameter
+from fmuid.discrepancy.lag import first_order_lag
 from fmuid.discrepancy.words import ORDINAL, Words, num
 from fmuid.model.feedback import FeedbackTerm
 
@@ -176,8 +177,6 @@ class InputLag(Effect):
 
     def on_input(self, time: np.ndarray, u: np.ndarray, p: Mapping[str, float]) -> np.ndarray:
         """Filter the input (exact for a piecewise-linear input on ``time``)."""
-        from fmuid.discrepancy.augment import first_order_lag
-
         return first_order_lag(time, u, self.value(p))
 
     def sentence(self, values: Mapping[str, float]) -> str:
@@ -412,4 +411,4 @@ RENAMED_PARAMETERS = {
     "tau_steer": "tau_delta",
     "offset_steer": "offset_delta",
 }
-"""Added parameter names of the tractor's results in earlier versions."""
+"""Added parameter names of earlier versions (a steer input was named by its role)."""
