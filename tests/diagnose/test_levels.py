@@ -33,6 +33,14 @@ def test_a_planted_pattern_is_named(extra: np.ndarray, pattern: str) -> None:
     assert found["p_value"] < 1e-6 and "the misfit of x" in found["words"]
 
 
+def test_a_misfit_that_grows_with_the_amplitude_is_named() -> None:
+    swing = 0.2 + 0.8 * np.abs(np.sin(0.15 * TIME))  # a slowly varying amplitude
+    y = swing * np.sin(9.0 * TIME)
+    r = np.random.default_rng(3).normal(0.0, 1.0, TIME.size) * (0.3 + 2.0 * swing)
+    found = level_location([ResidualSeries("e.csv", "x", TIME, y + r, y, r, "m")], 0.01)["x"]
+    assert found["pattern"] == "amplitude" and "amplitude of x" in found["words"]
+
+
 def test_noise_alone_names_no_pattern_and_the_figure_draws() -> None:
     found = level_location(_series(np.zeros(TIME.size), 2), 0.01)
     assert found["x"]["pattern"] is None and found["x"]["words"] == ""

@@ -15,11 +15,17 @@ top         ``y`` above its 90 % quantile: only near the top of the range (a sat
 bottom      ``y`` below its 10 % quantile
 rate_sign   ``sign(dy/dt)``: a step whenever the rate changes sign (Coulomb friction,
             backlash)
+amplitude   the residual's RMS over short windows grows with the output's RMS there: the
+            misfit grows with the amplitude (a stiffness or a gain that depends on the size
+            of the motion), also where it is not a static function of the level (one-sided
+            slope test over windows of :data:`WINDOWS` of a record, at least 8 samples)
 ==========  ==============================================================================
 
-An F test of each added shape gives a p-value; the strongest pattern is stated when its
-p-value is below the diagnosis' level. Binned means of the residual against ``y`` and against
-``dy/dt`` (quantile bins) are kept for the figure that shows them.
+An F test of each added shape gives a p-value; of the shapes significant at the diagnosis'
+level, the one that explains the largest share of the residual sum of squares is stated (on a
+long record several p-values underflow to 0, so the share, not the p-value, ranks them).
+Binned means of the residual against ``y`` and against ``dy/dt`` (quantile bins) are kept for
+the figure that shows them.
 """
 
 from __future__ import annotations
@@ -32,6 +38,9 @@ from scipy import stats
 
 from fmuid.estimation.series import ResidualSeries
 
+WINDOWS = 200
+"""Windows per record of the amplitude test (each at least 8 samples)."""
+
 BINS = 12
 """Quantile bins of the level and of the rate in the figure's data."""
 
@@ -42,6 +51,7 @@ WORDS = {
     "top": "sits near the top of {y}'s range (above its 90 % quantile)",
     "bottom": "sits near the bottom of {y}'s range (below its 10 % quantile)",
     "rate_sign": "jumps when the rate of {y} changes sign",
+    "amplitude": "grows with the amplitude of {y} (larger where {y} swings wider)",
 }
 
 
@@ -71,6 +81,26 @@ def _f_test(r: np.ndarray, base: np.ndarray, extra: np.ndarray) -> tuple[float, 
         return 1.0, 0.0
     f = (rss0 - rss1) / (rss1 / df)
     return float(stats.f.sf(f, 1, df)), (rss0 - rss1) / max(float(r @ r), 1e-300)
+
+
+def _amplitude(parts: Sequence[ResidualSeries]) -> tuple[float, float]:
+    """Return the one-sided p-value and R^2 of the residual's window RMS against the output's."""
+    y_rms, r_rms = [], []
+    for s in parts:
+        width = max(8, len(s.model) // WINDOWS)
+        n = len(s.model) // width
+        if n < 3:
+            continue
+        for x, out in ((s.model, y_rms), (s.weighted, r_rms)):
+            blocks = (x - np.mean(x))[: n * width].reshape(n, width)
+            out.append(np.sqrt(np.mean(blocks**2, axis=1)))
+    if not y_rms or sum(len(v) for v in y_rms) < 5:
+        return 1.0, 0.0
+    fit = stats.linregress(np.concatenate(y_rms), np.concatenate(r_rms))
+    if not np.isfinite(fit.pvalue):
+        return 1.0, 0.0
+    p = fit.pvalue / 2 if fit.slope > 0 else 1.0 - fit.pvalue / 2
+    return float(p), float(fit.rvalue**2)
 
 
 def _bins(x: np.ndarray, r: np.ndarray) -> dict[str, list[float]]:
@@ -111,7 +141,8 @@ def level_location(series: Sequence[ResidualSeries], alpha: float) -> dict[str, 
         tests = {
             name: _f_test(r, base, shape) for name, shape in _shapes(y, rate).items()
         }  # fmt: skip
-        name = min(tests, key=lambda k: tests[k][0])
+        tests["amplitude"] = _amplitude(parts)
+        name = max(tests, key=lambda k: (tests[k][0] < alpha, tests[k][1]))
         p, share = tests[name]
         found = p < alpha
         out[output] = {
