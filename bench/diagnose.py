@@ -7,7 +7,7 @@ reduced chi2 is noise-sized) while the likelihood-ratio test of the true augment
 p in [1e-12, 1e-3]. Controls are drawn the same way without an effect. Only the result JSON of
 ``diagnose`` is read.
 
-    python bench/diagnose.py [--seeds 8] [--controls 30] [--effects sensor_lag,...]
+    python bench/diagnose.py [--seeds 8] [--controls 30] [--effects output_lag,...]
         [--cache DIR] [--jobs N] [--shard K/N] [--log F] [--generate-only]
         [--easy [--easy-seeds 2]] [--no-absorbed] [--skip-done LOG]
     python bench/diagnose.py --false-alarm 200 [--cache DIR] [--jobs N] [--shard K/N] [--log F]
@@ -45,14 +45,14 @@ from fmuid.model.builtin import builtin_fmu  # noqa: E402
 from operational import study_spec  # noqa: E402
 
 PARAMETER = {
-    "sensor_lag": "tau_sensor",
+    "output_lag": "tau_outputs",
     "input_delay": "delay_delta",
-    "steering_lag": "tau_steer",
-    "steer_offset": "offset_steer",
+    "input_lag": "tau_delta",
+    "input_offset": "offset_delta",
     "tire_saturation": "alpha_sat",
     "side_slope": "slope",
 }
-"""Added parameter of each effect (``gyro_bias``: ``bias_<output>``)."""
+"""Added parameter of each effect (``output_bias``: ``bias_<output>``)."""
 FALSE_ALARM_SEED = 10_000
 """First seed of the false-alarm controls (apart from the 30 controls of the table)."""
 

@@ -1,15 +1,27 @@
-"""Median wall time of one run per FMU kind: the built-in tractor (fmuid Simulator vs
-fmpy.simulate_fmu, and hosted as an FMU with an unreliable reset: a fresh instance per run in a
-simulation process replaced every 50 runs) and the Reference-FMUs in ../shared/reference-fmus
-(FMI 2.0/3.0, co-simulation/model exchange), when that folder exists."""
+"""Simulation cost, two tables.
+
+1. Per-sample cost of the co-simulation master loop, native (C, :mod:`fmuid.model.native`)
+   and Python (the reference), on long records with an input sample at every output sample
+   (610 Hz, as the Silverbox recordings): msd on 4,000 and 65,062 samples, the tractor on
+   4,000, Reference-FMUs (Feedthrough FMI 2.0 with 1 ms midpoint sub-steps, VanDerPol FMI 3.0)
+   when ../shared/reference-fmus exists; with the largest difference between the two loops.
+2. Median wall time of one 10 s run per FMU kind: the built-in tractor (fmuid Simulator vs
+   fmpy.simulate_fmu, and hosted as an FMU with an unreliable reset: a fresh instance per run in
+   a simulation process replaced every 50 runs) and the Reference-FMUs (FMI 2.0/3.0,
+   co-simulation/model exchange).
+
+``python bench/simulate.py --loops`` prints the first table only.
+"""
 
 from __future__ import annotations
 
 import os
 import statistics
+import sys
 import tempfile
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import fmpy
@@ -41,6 +53,52 @@ FOREIGN = [  # (file, interface, inputs, outputs)
     ("fmi3/Feedthrough.fmu", "CoSimulation", RAMP, ["Float64_continuous_output"]),
     ("fmi2/Feedthrough.fmu", "ModelExchange", RAMP, ["Float64_continuous_output"]),
 ]
+
+
+RATE = 610.0
+"""Sample rate [Hz] of the per-sample table (the Silverbox recordings')."""
+LOOP_CASES = [  # (label, FMU: built-in name or Reference-FMU file, input, outputs, samples)
+    ("msd", "msd", "f", ["x", "v"], 4000),
+    ("msd", "msd", "f", ["x", "v"], 65062),
+    ("tractor_implement", "tractor_implement", "delta", ["gam_t", "gam_i"], 4000),
+    ("Feedthrough FMI 2.0 CS", "fmi2/Feedthrough.fmu", "Float64_continuous_input",
+     ["Float64_continuous_output"], 4000),
+    ("VanDerPol FMI 3.0 CS", "fmi3/VanDerPol.fmu", None, ["x0", "x1"], 4000),
+]  # fmt: skip
+
+
+def loop_rows() -> list[tuple[str, int, float, float, float]]:
+    """Per-sample cost [s] of the native and the Python loop, and their largest difference."""
+    rows = []
+    for label, fmu, name, outputs, n in LOOP_CASES:
+        path = REFERENCE_DIR / fmu if fmu.endswith(".fmu") else builtin_fmu(fmu)
+        if not path.is_file():
+            continue
+        t = np.arange(n) / RATE
+        u = 0.1 * np.sin(2 * np.pi * 0.7 * t) + 0.05 * np.sin(2 * np.pi * 9.3 * t)
+        inputs = {name: (40.0 if name == "f" else 1.0) * u} if name else {}
+        t_in = t if name else t[:1]
+        sim = Simulator(path)
+        runs = max(3, min(50, 200_000 // n))
+        cost, result = [], []
+        run = partial(sim.simulate, {}, t_in, inputs, t, outputs)
+        for native in (True, False):
+            sim.native = native
+            result.append(run())
+            cost.append(median_seconds(run, runs if native else 3) / n)
+        sim.close()
+        rows.append((label, n, cost[0], cost[1], float(np.max(np.abs(result[0] - result[1])))))
+    return rows
+
+
+def print_loops() -> None:
+    """Print the per-sample table."""
+    print(f"master loop per sample, {RATE:g} Hz records, an input sample at every output sample")  # noqa: T201
+    print(f"{'FMU':<26} {'samples':>8} {'native us':>10} {'Python us':>10} {'speed-up':>9} "  # noqa: T201
+          f"{'max |diff|':>11}")  # fmt: skip
+    for label, n, native, python, diff in loop_rows():
+        print(f"{label:<26} {n:>8} {native * 1e6:>10.3f} {python * 1e6:>10.2f} "  # noqa: T201
+              f"{python / native:>8.0f}x {diff:>11.2g}")  # fmt: skip
 
 
 def median_seconds(run: Callable[[], object], runs: int) -> float:
@@ -135,7 +193,11 @@ def pythonfmu_rows(runs: int) -> list[tuple[str, str, float]]:
 
 
 def main() -> None:
-    """Print the table."""
+    """Print the tables."""
+    print_loops()
+    if "--loops" in sys.argv[1:]:
+        return
+    print()  # noqa: T201
     rows = tractor_rows() + foreign_rows(RUNS // 4) + pythonfmu_rows(RUNS // 20)
     print("10 s runs, outputs at 5 Hz (a 1 s ramp input where the FMU has one); median ms")  # noqa: T201
     print(f"{'FMU':<58} {'median ms':>10} {'runs/s':>8}  input handling")  # noqa: T201

@@ -1,13 +1,17 @@
 /*
  * Shared FMI 2.0 co-simulation layer used by every fmuid model.
  *
- * The model's physics (model.h) is integrated with a fixed-step classical Runge-Kutta method:
- * a communication step h is split into n = ceil(h / 4 ms) equal sub-steps, so runs are
- * deterministic and the outputs are smooth functions of the parameters. At 4 ms the tractor's
- * yaw rates stay within 1e-6 rad/s of a tight solve_ivp reference at every corner of the thesis's
- * Table 3.2 bounds (tests/model), at a quarter of the cost of 1 ms. Inputs are linear inside a step when the master sets first-order input
- * derivatives (fmi2SetRealInputDerivatives): u(t) = u + du/dt * (t - t_set), with t_set the
- * communication point at which the value was set. Every error returns fmi2Error, logs a message
+ * The model's physics (model.h) is integrated by the Dormand-Prince 5(4) embedded Runge-Kutta
+ * pair with error control: each step's local error estimate is kept within RTOL times the
+ * state's size plus ATOL (an RMS norm over the states), so the step follows the dynamics (a
+ * slow process takes steps of seconds, a stiff tire transient milliseconds) and the results
+ * stay within about 1e-9 of tight independent solutions. Steps end exactly at communication
+ * points; the step size proposed at the end of one fmi2DoStep starts the next. Everything is
+ * deterministic: the same parameters, inputs and communication points give the same numbers
+ * (fmi2SetupExperiment's tolerance is ignored, as masters pass their own defaults there).
+ * Inputs are linear inside a step when the master sets first-order input derivatives
+ * (fmi2SetRealInputDerivatives): u(t) = u + du/dt * (t - t_set), with t_set the communication
+ * point at which the value was set; each stage sees the input at its own time. Every error returns fmi2Error, logs a message
  * under the category "logStatusError" and puts the instance into the error state, from which
  * only fmi2Reset, fmi2FreeInstance and the get functions are allowed.
  */
@@ -20,7 +24,10 @@
 #include "fmi2Functions.h"
 #include "model.h"
 
-#define MAX_SUBSTEP 4e-3
+#define RTOL 1e-10
+#define ATOL 1e-12
+/* Smallest step [s] before giving up: faster dynamics are taken as a stiff or unstable model. */
+#define MIN_STEP 1e-7
 #define N_INPUTS_ALLOC (N_INPUTS > 0 ? N_INPUTS : 1)
 
 typedef enum {
@@ -42,6 +49,7 @@ typedef struct {
     double input_der[N_INPUTS_ALLOC];
     double input_time[N_INPUTS_ALLOC];
     double time;
+    double h_next; /* step size to try next; 0 before the first step */
     Mode mode;
 } Snapshot;
 
@@ -102,6 +110,7 @@ static void restore_start_values(Instance *c) {
     memset(c->s.input_der, 0, sizeof(c->s.input_der));
     memset(c->s.input_time, 0, sizeof(c->s.input_time));
     c->s.time = 0.0;
+    c->s.h_next = 0.0;
     c->s.mode = MODE_INSTANTIATED;
     c->cache_valid = 0;
 }
@@ -125,25 +134,119 @@ static void inputs_at(const Instance *c, double t, double *u) {
     }
 }
 
-static void rk4_step(Instance *c, double t, double h) {
-    double k1[N_STATES], k2[N_STATES], k3[N_STATES], k4[N_STATES], xt[N_STATES];
-    double u[N_INPUTS_ALLOC];
-    double *x = c->s.x;
-    const double half = 0.5 * h;
+/* Dormand-Prince 5(4) coefficients (Dormand & Prince 1980; Hairer, Norsett & Wanner, II.5). */
+static const double C2 = 1.0 / 5, C3 = 3.0 / 10, C4 = 4.0 / 5, C5 = 8.0 / 9;
+static const double A21 = 1.0 / 5;
+static const double A31 = 3.0 / 40, A32 = 9.0 / 40;
+static const double A41 = 44.0 / 45, A42 = -56.0 / 15, A43 = 32.0 / 9;
+static const double A51 = 19372.0 / 6561, A52 = -25360.0 / 2187, A53 = 64448.0 / 6561,
+                    A54 = -212.0 / 729;
+static const double A61 = 9017.0 / 3168, A62 = -355.0 / 33, A63 = 46732.0 / 5247,
+                    A64 = 49.0 / 176, A65 = -5103.0 / 18656;
+static const double B1 = 35.0 / 384, B3 = 500.0 / 1113, B4 = 125.0 / 192, B5 = -2187.0 / 6784,
+                    B6 = 11.0 / 84;
+/* fifth-order minus embedded fourth-order weights */
+static const double E1 = 71.0 / 57600, E3 = -71.0 / 16695, E4 = 71.0 / 1920,
+                    E5 = -17253.0 / 339200, E6 = 22.0 / 525, E7 = -1.0 / 40;
 
+static void derivatives_at(const Instance *c, double t, const double *x, double *dx) {
+    double u[N_INPUTS_ALLOC];
     inputs_at(c, t, u);
-    model_derivatives(c->cache, x, u, k1);
-    for (int i = 0; i < N_STATES; i++) xt[i] = x[i] + half * k1[i];
-    inputs_at(c, t + half, u);
-    model_derivatives(c->cache, xt, u, k2);
-    for (int i = 0; i < N_STATES; i++) xt[i] = x[i] + half * k2[i];
-    model_derivatives(c->cache, xt, u, k3);
-    for (int i = 0; i < N_STATES; i++) xt[i] = x[i] + h * k3[i];
-    inputs_at(c, t + h, u);
-    model_derivatives(c->cache, xt, u, k4);
+    model_derivatives(c->cache, x, u, dx);
+}
+
+/* RMS norm of v_i / (ATOL + RTOL * max(|a_i|, |b_i|)). */
+static double error_norm(const double *v, const double *a, const double *b) {
+    double sum = 0.0;
     for (int i = 0; i < N_STATES; i++) {
-        x[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+        double scale = ATOL + RTOL * fmax(fabs(a[i]), fabs(b[i]));
+        double r = v[i] / scale;
+        sum += r * r;
     }
+    return N_STATES > 0 ? sqrt(sum / N_STATES) : 0.0;
+}
+
+/* First step size from the derivatives at the start (Hairer, Norsett & Wanner, II.4). */
+static double initial_step(const Instance *c, double t, const double *f0, double h_max) {
+    double x1[N_STATES], f1[N_STATES], diff[N_STATES];
+    const double *x = c->s.x;
+    double d0 = error_norm(x, x, x), d1 = error_norm(f0, x, x), d2, h0, h1;
+    h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+    h0 = fmin(h0, h_max);
+    for (int i = 0; i < N_STATES; i++) x1[i] = x[i] + h0 * f0[i];
+    derivatives_at(c, t + h0, x1, f1);
+    for (int i = 0; i < N_STATES; i++) diff[i] = f1[i] - f0[i];
+    d2 = error_norm(diff, x, x) / h0;
+    if (fmax(d1, d2) <= 1e-15) {
+        h1 = fmax(1e-6, h0 * 1e-3);
+    } else {
+        h1 = pow(0.01 / fmax(d1, d2), 1.0 / 5.0);
+    }
+    return fmin(fmin(100.0 * h0, h1), h_max);
+}
+
+/*
+ * Integrate the states from t0 to t_end with error-controlled Dormand-Prince steps.
+ * Returns 0, or -1 when the step size falls below MIN_STEP (the model is too stiff at these
+ * parameters, or its state grows without bound or became non-finite).
+ */
+static int integrate(Instance *c, double t0, double t_end) {
+    double k1[N_STATES], k2[N_STATES], k3[N_STATES], k4[N_STATES], k5[N_STATES], k6[N_STATES],
+        k7[N_STATES], xt[N_STATES], x_new[N_STATES], err[N_STATES];
+    double *x = c->s.x;
+    double t = t0, h_try = c->s.h_next;
+    int rejected = 0;
+    if (N_STATES == 0 || !(t_end > t0)) return 0;
+    derivatives_at(c, t, x, k1);
+    if (!(h_try > 0.0)) h_try = initial_step(c, t, k1, t_end - t0);
+    while (t < t_end) {
+        const double remaining = t_end - t;
+        const int clipped = h_try >= remaining * (1.0 - 1e-12);
+        const double h = clipped ? remaining : h_try;
+        double norm, factor;
+        if (!clipped && !(h >= MIN_STEP)) return -1;
+        for (int i = 0; i < N_STATES; i++) xt[i] = x[i] + h * A21 * k1[i];
+        derivatives_at(c, t + C2 * h, xt, k2);
+        for (int i = 0; i < N_STATES; i++) xt[i] = x[i] + h * (A31 * k1[i] + A32 * k2[i]);
+        derivatives_at(c, t + C3 * h, xt, k3);
+        for (int i = 0; i < N_STATES; i++) {
+            xt[i] = x[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+        }
+        derivatives_at(c, t + C4 * h, xt, k4);
+        for (int i = 0; i < N_STATES; i++) {
+            xt[i] = x[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+        }
+        derivatives_at(c, t + C5 * h, xt, k5);
+        for (int i = 0; i < N_STATES; i++) {
+            xt[i] = x[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] +
+                                A65 * k5[i]);
+        }
+        derivatives_at(c, t + h, xt, k6);
+        for (int i = 0; i < N_STATES; i++) {
+            x_new[i] = x[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i]);
+        }
+        derivatives_at(c, t + h, x_new, k7);
+        for (int i = 0; i < N_STATES; i++) {
+            err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +
+                          E7 * k7[i]);
+        }
+        norm = error_norm(err, x, x_new);
+        if (norm <= 1.0) {
+            factor = norm == 0.0 ? 5.0 : fmin(5.0, 0.9 * pow(norm, -0.2));
+            if (rejected) factor = fmin(factor, 1.0);
+            memcpy(x, x_new, sizeof(x_new));
+            memcpy(k1, k7, sizeof(k7));
+            t = clipped ? t_end : t + h;
+            h_try = clipped ? fmax(h_try, h * factor) : h * factor;
+            rejected = 0;
+        } else {
+            factor = isfinite(norm) ? fmax(0.2, 0.9 * pow(norm, -0.2)) : 0.2;
+            h_try = h * factor;
+            rejected = 1;
+        }
+    }
+    c->s.h_next = h_try;
+    return 0;
 }
 
 /* ---------------------------------------------------------------- common functions */
@@ -457,8 +560,6 @@ fmi2Status fmi2DoStep(fmi2Component component, fmi2Real currentCommunicationPoin
     Instance *c = component;
     const double t0 = currentCommunicationPoint;
     const double h = communicationStepSize;
-    long n;
-    double dt;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!allowed(c, "fmi2DoStep", MODE_STEP)) return fmi2Error;
     if (!isfinite(h) || h < 0.0) return fail(c, "fmi2DoStep: invalid step size %g", h);
@@ -467,11 +568,10 @@ fmi2Status fmi2DoStep(fmi2Component component, fmi2Real currentCommunicationPoin
                     t0, c->s.time);
     }
     if (apply_parameters(c) != fmi2OK) return fmi2Error;
-    n = (long)ceil(h / MAX_SUBSTEP - 1e-9);
-    if (n < 1) n = 1;
-    dt = h / (double)n;
-    for (long k = 0; k < n; k++) {
-        rk4_step(c, t0 + (double)k * dt, dt);
+    if (integrate(c, t0, t0 + h) != 0) {
+        return fail(c, "fmi2DoStep: the step size fell below %g s between t = %g and %g: the "
+                    "model is too stiff at these parameters, or its state grows without bound or "
+                    "became non-finite", MIN_STEP, t0, t0 + h);
     }
     for (int i = 0; i < N_STATES; i++) {
         if (!isfinite(c->s.x[i])) {

@@ -46,18 +46,18 @@ TOLERANCE = 1.1
 CODE: dict[str | None, int] = {None: 0, **{e: i + 1 for i, e in enumerate(ft.EFFECTS)}}
 """Per-effect stream of the random draws (``None``: controls)."""
 FIRST_STRENGTH = {
-    "sensor_lag": 0.05, "input_delay": 0.05, "steering_lag": 0.05, "steer_offset": 0.001,
-    "gyro_bias": 0.001, "tire_saturation": 10.0, "side_slope": 0.03, "hitch_stiffness": 5000.0,
+    "output_lag": 0.05, "input_delay": 0.05, "input_lag": 0.05, "input_offset": 0.001,
+    "output_bias": 0.001, "tire_saturation": 10.0, "side_slope": 0.03, "hitch_stiffness": 5000.0,
     "aligning_torque": 0.05,
 }  # fmt: skip
 """Where the search starts (strength units: see :func:`magnitude_of`)."""
 STRENGTH_RANGE = {
-    "sensor_lag": (1e-4, 1.0), "input_delay": (1e-4, 1.0), "steering_lag": (1e-4, 1.0),
-    "steer_offset": (1e-6, 0.1), "gyro_bias": (1e-6, 0.1), "tire_saturation": (0.5, 500.0),
+    "output_lag": (1e-4, 1.0), "input_delay": (1e-4, 1.0), "input_lag": (1e-4, 1.0),
+    "input_offset": (1e-6, 0.1), "output_bias": (1e-6, 0.1), "tire_saturation": (0.5, 500.0),
     "side_slope": (1e-5, 0.5), "hitch_stiffness": (1.0, 1e6),
     "aligning_torque": (1e-4, 2.0),
 }  # fmt: skip
-SIGNED = ("steer_offset", "gyro_bias", "side_slope")
+SIGNED = ("input_offset", "output_bias", "side_slope")
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ class Design:
     runs
         Per experiment: name, steer times and values, output times, sigma [rad/s], SNR.
     bias_output, sign
-        The biased channel (``gyro_bias``) and the sign of a signed effect.
+        The biased channel (``output_bias``) and the sign of a signed effect.
     target_lambda
         Noncentrality the magnitude is sized for.
     """
@@ -154,9 +154,9 @@ def recordings(design: Design, magnitude: float, noise: tuple[int, ...] | None) 
     rng = np.random.default_rng(list(noise)) if noise is not None else None
     out = []
     for name, t_in, u_in, t_out, sigma, _ in design.runs:
-        effect = design.effect if design.effect != "gyro_bias" else None
+        effect = design.effect if design.effect != "output_bias" else None
         y = ft.simulate_truth(design.truth, t_in, u_in, t_out, effect, magnitude)
-        if design.effect == "gyro_bias":
+        if design.effect == "output_bias":
             y[design.bias_output] = y[design.bias_output] + magnitude
         outputs = {o: y[o] for o in ("gam_t", "gam_i")}
         if rng is not None:

@@ -8,11 +8,11 @@ produces it, never through the candidate predictors of ``fmuid.diagnose``:
 ============== =========================================================================
 effect         how the truth makes it
 ============== =========================================================================
-sensor_lag     extra states y_m' = (y - y_m) / tau for each yaw-rate channel
+output_lag     extra states y_m' = (y - y_m) / tau for each yaw-rate channel
 input_delay    the vehicle steers with delta(t - delay)
-steering_lag   extra actuator state delta_a' = (delta - delta_a) / tau
-steer_offset   the vehicle steers with delta + offset
-gyro_bias      the recorded channel is gam + bias
+input_lag   extra actuator state delta_a' = (delta - delta_a) / tau
+input_offset   the vehicle steers with delta + offset
+output_bias      the recorded channel is gam + bias
 tire_saturation  every lateral tire force is -C alpha_sat tanh(alpha / alpha_sat)
 side_slope     m g sin(slope) cos(psi) pulls each body sideways at its CG
 hitch_stiffness  (not in the catalogue) a torsional spring-damper in the hitch resists the
@@ -54,7 +54,7 @@ BOUNDS = {
 """Thesis Table 3.2 bounds of the six free tire parameters."""
 
 EFFECTS = (
-    "sensor_lag", "input_delay", "steering_lag", "steer_offset", "gyro_bias",
+    "output_lag", "input_delay", "input_lag", "input_offset", "output_bias",
     "tire_saturation", "side_slope", "hitch_stiffness", "aligning_torque",
 )  # fmt: skip
 
@@ -62,11 +62,11 @@ UNCATALOGUED = ("hitch_stiffness", "aligning_torque")
 """Effects that no catalogue candidate models: a right diagnosis says ``unexplained``."""
 
 MAGNITUDES = {
-    "sensor_lag": (0.1, 0.2),  # tau [s]
+    "output_lag": (0.1, 0.2),  # tau [s]
     "input_delay": (0.1, 0.2),  # delay [s]
-    "steering_lag": (0.1, 0.2),  # tau [s]
-    "steer_offset": (0.0015, 0.003),  # [rad]
-    "gyro_bias": (0.6, 1.2),  # bias in units of the channel's noise sigma
+    "input_lag": (0.1, 0.2),  # tau [s]
+    "input_offset": (0.0015, 0.003),  # [rad]
+    "output_bias": (0.6, 1.2),  # bias in units of the channel's noise sigma
     "tire_saturation": (0.07, 0.045),  # alpha_sat [rad]; smaller saturates more
     "side_slope": (0.06, 0.12),  # [rad]
     "hitch_stiffness": (10000.0, 20000.0),  # [N m/rad]; damping 0.3 s times it
@@ -84,13 +84,13 @@ class Case:
     effect
         Effect name (``None`` for a control).
     magnitude
-        The effect's size in the unit of its catalogue parameter (``gyro_bias``: rad/s).
+        The effect's size in the unit of its catalogue parameter (``output_bias``: rad/s).
     truth
         Every model parameter used.
     experiments
         The step and the chirp recordings.
     bias_output
-        The biased channel for ``gyro_bias``.
+        The biased channel for ``output_bias``.
     """
 
     effect: str | None
@@ -151,7 +151,7 @@ def simulate_truth(
     output_time
         Times [s] at which to return the recorded yaw rates.
     effect, magnitude
-        One of :data:`EFFECTS` (``gyro_bias`` is added by the caller) and its size.
+        One of :data:`EFFECTS` (``output_bias`` is added by the caller) and its size.
 
     Returns
     -------
@@ -174,9 +174,9 @@ def simulate_truth(
     k_hitch = magnitude if effect == "hitch_stiffness" else 0.0
     trail = magnitude if effect == "aligning_torque" else 0.0
     delay = magnitude if effect == "input_delay" else 0.0
-    offset = magnitude if effect == "steer_offset" else 0.0
-    tau_steer = magnitude if effect == "steering_lag" else 0.0
-    tau_sensor = magnitude if effect == "sensor_lag" else 0.0
+    offset = magnitude if effect == "input_offset" else 0.0
+    tau_delta = magnitude if effect == "input_lag" else 0.0
+    tau_outputs = magnitude if effect == "output_lag" else 0.0
 
     def tire(stiffness: float, alpha: float) -> float:
         if sat > 0:
@@ -188,7 +188,7 @@ def simulate_truth(
 
     def rhs(t: float, s: np.ndarray) -> np.ndarray:
         v, gt, gi, af, ar, ai, pt, pi = s[:8]
-        delta = s[8] if tau_steer > 0 else steer(t)
+        delta = s[8] if tau_delta > 0 else steer(t)
         ff, fr, fi = tire(p["C_atf"], af), tire(p["C_atr"], ar), tire(p["C_air"], ai)
         gt_force = mt * G * np.sin(slope) * np.cos(pt)
         gi_force = mi * G * np.sin(slope) * np.cos(pi)
@@ -210,17 +210,17 @@ def simulate_truth(
         ds[6] = gt
         ds[7] = gi
         k = 8
-        if tau_steer > 0:
-            ds[8] = (steer(t) - s[8]) / tau_steer
+        if tau_delta > 0:
+            ds[8] = (steer(t) - s[8]) / tau_delta
             k = 9
-        if tau_sensor > 0:
-            ds[k] = (gt - s[k]) / tau_sensor
-            ds[k + 1] = (gi - s[k + 1]) / tau_sensor
+        if tau_outputs > 0:
+            ds[k] = (gt - s[k]) / tau_outputs
+            ds[k + 1] = (gi - s[k + 1]) / tau_outputs
         return ds
 
-    n_states = 8 + (tau_steer > 0) + 2 * (tau_sensor > 0)
+    n_states = 8 + (tau_delta > 0) + 2 * (tau_outputs > 0)
     s0 = np.zeros(n_states)
-    if tau_steer > 0:
+    if tau_delta > 0:
         s0[8] = steer(float(output_time[0]))
     t_span = (float(min(input_time[0], output_time[0])), float(output_time[-1]))
     max_step = float(np.min(np.diff(input_time)))
@@ -230,8 +230,8 @@ def simulate_truth(
     )  # fmt: skip
     if not sol.success:
         raise RuntimeError(f"field truth integration failed: {sol.message}")
-    k = 8 + (tau_steer > 0)
-    gam_t, gam_i = (sol.y[k], sol.y[k + 1]) if tau_sensor > 0 else (sol.y[1], sol.y[2])
+    k = 8 + (tau_delta > 0)
+    gam_t, gam_i = (sol.y[k], sol.y[k + 1]) if tau_outputs > 0 else (sol.y[1], sol.y[2])
     return {"gam_t": gam_t, "gam_i": gam_i, "psi_t": sol.y[6], "psi_i": sol.y[7]}
 
 
@@ -249,7 +249,7 @@ def make_case(
     effect
         One of :data:`EFFECTS`, or ``None`` for a control without any effect.
     magnitude
-        The effect's size (see :data:`MAGNITUDES`; ``gyro_bias`` in noise sigmas).
+        The effect's size (see :data:`MAGNITUDES`; ``output_bias`` in noise sigmas).
     seed
         Draws tire parameters off nominal (log-normal, 25%), steer amplitudes, SNR, the
         sampling rate (5 or 10 Hz), the biased channel and the noise.
@@ -283,13 +283,13 @@ def make_case(
             u_in = chirp_steer(t_in, sign * np.deg2rad(rng.uniform(4.0, 7.0)))
         y = simulate_truth(truth, t_in, u_in, t_out, effect, magnitude)
         sigma = float(np.max(np.abs(y["gam_t"])) / case_snr)
-        if effect == "gyro_bias":
+        if effect == "output_bias":
             bias_value = magnitude * sigma if not bias_value else bias_value
             y[bias_output] = y[bias_output] + bias_value
         noisy = {o: y[o] + rng.normal(0.0, sigma, len(t_out)) for o in ("gam_t", "gam_i")}
         experiments.append(recording(name, t_in, u_in, t_out, noisy, sigma))
         snrs[name] = case_snr
-    reported = bias_value if effect == "gyro_bias" else magnitude
+    reported = bias_value if effect == "output_bias" else magnitude
     return Case(effect, reported, truth, experiments, bias_output, snrs)
 
 

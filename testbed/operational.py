@@ -47,8 +47,8 @@ FINE_STEP = 0.02
 SWITCHED = {"tire_saturation": "alpha_sat", "side_slope": "slope"}
 """Effects that are FMU parameters (off at 0)."""
 AUGMENTATION_BOUNDS = {
-    "sensor_lag": (0.0, 1.0), "input_delay": (0.0, 1.0), "steering_lag": (0.0, 1.0),
-    "steer_offset": (-0.1, 0.1), "gyro_bias": (-0.1, 0.1),
+    "output_lag": (0.0, 1.0), "input_delay": (0.0, 1.0), "input_lag": (0.0, 1.0),
+    "input_offset": (-0.1, 0.1), "output_bias": (-0.1, 0.1),
     "tire_saturation": (1e-3, 2.0), "side_slope": (-0.5, 0.5),
 }  # fmt: skip
 """Bounds of the added parameter of each catalogued effect (its unit)."""
@@ -143,7 +143,7 @@ def augmented_outputs(
     effect, magnitude
         A catalogued effect and its parameter (unit of ``AUGMENTATION_BOUNDS``).
     bias_output
-        The channel that ``gyro_bias`` shifts.
+        The channel that ``output_bias`` shifts.
     """
     sim = get_simulator(builtin_fmu("tractor_implement"))
     t_in, u_in = experiment.input_samples("delta")
@@ -156,20 +156,20 @@ def augmented_outputs(
     if effect == "input_delay":
         grid = np.union1d(t_in, np.clip(t_in + magnitude, t0, t1))
         u_sim, t_sim = np.interp(grid - magnitude, t_in, u_in), grid
-    elif effect == "steering_lag":
+    elif effect == "input_lag":
         u_sim, t_sim = first_order_lag(fine, np.interp(fine, t_in, u_in), magnitude), fine
-    elif effect == "steer_offset":
+    elif effect == "input_offset":
         u_sim, t_sim = u_in + magnitude, t_in
     else:
         u_sim, t_sim = u_in, t_in
-    if effect == "sensor_lag":
+    if effect == "output_lag":
         grid = np.union1d(t_out, fine)
         y = sim.simulate(values, t_sim, {"delta": u_sim}, grid, list(OUTPUTS))
         rows = np.searchsorted(grid, t_out)
         return {o: first_order_lag(grid, y[:, j], magnitude)[rows] for j, o in enumerate(OUTPUTS)}
     y = sim.simulate(values, t_sim, {"delta": u_sim}, t_out, list(OUTPUTS))
     out = {o: y[:, j].copy() for j, o in enumerate(OUTPUTS)}
-    if effect == "gyro_bias":
+    if effect == "output_bias":
         out[bias_output] += magnitude
     return out
 
@@ -289,7 +289,7 @@ def check_case(
     starts
         Tire values to start the base fit from (the best fit wins).
     bias_output
-        The biased channel of ``gyro_bias``.
+        The biased channel of ``output_bias``.
     """
     problem, fit = base_fit(experiments, starts)
     lb = {k: ljung_box(r) for k, r in channel_residuals(problem, fit).items()}

@@ -1,7 +1,7 @@
 /*
  * EMPS positioning axis in its PD loop (Janot, Gautier, Brunot 2019, eqs. 1-7), states qm, v:
  *   vir = clamp(kv (kp (q_ref - qm) - v), -vir_max, vir_max)
- *   M v' = gtau vir - Fv v - Fc tanh(v / v_c) - offset,   qm' = v
+ *   M v' = gtau vir - Fv v - Fc tanh(v / v_c) - offset + f_ext,   qm' = v
  */
 #include <math.h>
 
@@ -40,7 +40,7 @@ void model_derivatives(const ModelCache *k, const double *x, const double *u, do
     const double vir = drive_voltage(k->kp, k->kv, k->vir_max, u[0], x);
     const double friction = k->viscous * x[X_v] + k->coulomb * tanh(x[X_v] * k->inv_vc);
     dx[X_qm] = x[X_v];
-    dx[X_v] = (k->gtau * vir - friction - k->offset) * k->inv_m;
+    dx[X_v] = (k->gtau * vir - friction - k->offset + u[1]) * k->inv_m;
 }
 
 void model_outputs(const double *x, double *r) {

@@ -88,6 +88,11 @@ def _cmd_build(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else fmu_dir()
     for path in build_fmus(src, out):
         print(path)  # noqa: T201
+    from fmuid.model.native.build import compile_library, library_path
+
+    loop = library_path(out)
+    compile_library(loop)
+    print(loop)  # noqa: T201
     return EXIT_OK
 
 
@@ -201,9 +206,11 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.discrepancy import diagnose
 
     fmu, experiments, spec, problem = _load_inputs(args)
-    held_out = {"test_data": _test_data(args)} if args.test_data else {}
+    tests = _test_data(args)
     with ProgressDisplay() as progress:
-        result = diagnose(fmu, experiments, spec, progress=progress, problem=problem, **held_out)
+        result = diagnose(
+            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)

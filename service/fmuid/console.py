@@ -193,6 +193,8 @@ def info_text(info: ModelInfo) -> str:
             found += {True: "; a reset run equals a fresh instance's", None: "",
                       False: "; its reset is UNRELIABLE (fmuid gives every run a fresh instance)"
                       }[h.reset_reliable]  # fmt: skip
+            if h.ignored:
+                found += f"; it IGNORES the parameters {', '.join(h.ignored)} that fmuid sets"
         parts.append(f"\nhealth ({start:g}-{stop:g} s): {found}")
     return "\n".join(parts)
 

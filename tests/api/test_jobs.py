@@ -126,7 +126,7 @@ def test_profile_on_dask_local_cluster_equals_local_pool(service_factory, step_c
 
 @pytest.mark.slow
 def test_diagnose_job_names_a_concealed_offset_as_the_direct_call_does(service, tmp_path):
-    case = ft.make_case("steer_offset", 0.0004, seed=8, rate=5.0)
+    case = ft.make_case("input_offset", 0.0004, seed=8, rate=5.0)
     paths = case.write(tmp_path / "offset")
     spec = {
         "parameters": {
@@ -147,9 +147,9 @@ def test_diagnose_job_names_a_concealed_offset_as_the_direct_call_does(service, 
         [load_experiment(p) for p in paths],
         spec_from_json(json.dumps(spec)),
     ).to_dict()
-    assert result["effect"] == direct["effect"] == "steer_offset"
+    assert result["effect"] == direct["effect"] == "input_offset"
     assert result["verdict"] == direct["verdict"]
-    assert result["added_parameters"]["offset_steer"]["ci"] == pytest.approx(
-        direct["added_parameters"]["offset_steer"]["ci"], rel=1e-6
+    assert result["added_parameters"]["offset_delta"]["ci"] == pytest.approx(
+        direct["added_parameters"]["offset_delta"]["ci"], rel=1e-6
     )
     assert "Verdict" in client.report(job)

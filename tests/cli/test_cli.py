@@ -99,9 +99,13 @@ def test_diagnose_writes_the_verdict_and_a_report(msd_fmu, tmp_path, capsys):
     result = json.loads(out.read_text())
     assert result["mismatch"] is False
     assert result["verdict"] in stdout
-    # no annotation in the msd FMU: generic candidates named by its input and output
+    # no annotation in the msd FMU: generic candidates named by its input and output (a step
+    # input has two levels, so no saturation level lies inside the range it reaches)
     labels = {next(iter(c["parameters"])) for c in result["candidates"]}
-    assert labels == {"tau_sensor", "delay_f", "tau_f", "offset_f", "bias_x"}
+    assert labels == {
+        "tau_outputs", "delay_f", "tau_f", "offset_f", "gain_f", "dead_f", "bias_x",
+        "gain_x", "max_x", "min_x", "c2_x_f", "c3_x_f", "coulomb_v_f",
+    }  # fmt: skip
     page = (tmp_path / "report" / "index.html").read_text()
     assert "Verdict" in page and result["verdict"] in page
 

@@ -63,7 +63,7 @@ def test_info_says_what_runs_at_the_start_values_showed(builtin_dir, leaky_reset
     assert code == 0, err
     assert json.loads(out)["health"] == {
         "simulates": True, "deterministic": True, "reset_reliable": True,
-        "horizon_s": [0.0, 10.0], "message": "",
+        "horizon_s": [0.0, 10.0], "message": "", "ignored": [],
     }  # fmt: skip
     code, out, err = run(["info", leaky_reset_fmu], capsys)
     assert code == 0, err

@@ -186,10 +186,10 @@ def test_several_problems_one_line_each():
 
 
 PHYSICS = {
-    "sensor_lag": {
+    "output_lag": {
         "description": "first-order lag on measured outputs",
         "parameters": {
-            "tau_sensor": {"off": 0.0, "start": 0.05, "lower": 0.0, "upper": 1.0, "unit": "s"}
+            "tau_outputs": {"off": 0.0, "start": 0.05, "lower": 0.0, "upper": 1.0, "unit": "s"}
         },
     }
 }
@@ -197,7 +197,7 @@ PHYSICS = {
 
 def test_physics():
     spec = spec_from_json(json.dumps(with_changes(physics=PHYSICS)))
-    parameter = spec.physics["sensor_lag"].parameters["tau_sensor"]
+    parameter = spec.physics["output_lag"].parameters["tau_outputs"]
     assert (parameter.off, parameter.unit, parameter.resolved_scale) == (0.0, "s", "lin")
     assert isinstance(parameter, ParameterSpec)
 

@@ -7,6 +7,8 @@ import pytest
 from scipy.stats import chi2
 
 from fmuid.data import ParameterSpec, experiment_from_arrays, spec_from_json
+from fmuid.discrepancy.effects import InputDelay, OutputLag
+from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.problem import Problem
 from fmuid.experiment_design import space_from_json
@@ -43,13 +45,15 @@ def proposal():
     spec, space = spec_from_json(json.dumps(SPEC)), space_from_json(json.dumps(SPACE))
     truth = {n: p.start for n, p in spec.parameters.items()}
     added = ParameterSpec(start=0.1, lower=0.005, upper=1.0)
+    tau = AddedParameter("tau_outputs", "s", "lag", added, 0.0, "low")
+    wait = AddedParameter("delay_f", "s", "delay", added, 0.0, "low")
     lag = Hypothesis(
-        "sensor_lag", {**spec.parameters, "tau_sensor": added}, {**truth, "tau_sensor": TAU},
-        {"tau_sensor": ("sensor_lag", None)},
+        "output_lag", {**spec.parameters, "tau_outputs": added}, {**truth, "tau_outputs": TAU},
+        (OutputLag("", (tau,)),),
     )  # fmt: skip
     delay = Hypothesis(
         "input_delay", {**spec.parameters, "delay_f": added}, {**truth, "delay_f": TAU},
-        {"delay_f": ("input_delay", "f")},
+        (InputDelay("f", (wait,)),),
     )  # fmt: skip
     return spec, space, lag, delay, discriminating_experiment("msd", spec, space, lag, delay)
 
@@ -62,7 +66,7 @@ def test_proposal_measures_both_sensors_at_full_amplitude(proposal):
     assert found.trial.settings["amplitude"] > 0.7
     assert found.expected_chi2 > 20
     doc = found.to_dict()
-    assert doc["hypotheses"] == ["sensor_lag", "input_delay"]
+    assert doc["hypotheses"] == ["output_lag", "input_delay"]
     assert doc["expected_p_value"] < 1e-3
     fig = discrimination_figure(found)
     assert len(fig.axes) == 3
@@ -72,7 +76,7 @@ def test_one_hypothesis_against_several_equals_each_pair(proposal):
     # A's predictions and sensitivities are shared between the pairs; the answers are the pairs'
     spec, space, lag, delay, found = proposal
     slower = Hypothesis(
-        "slower_lag", lag.parameters, {**lag.values, "tau_sensor": TAU / 2}, lag.wrappers
+        "slower_lag", lag.parameters, {**lag.values, "tau_outputs": TAU / 2}, lag.effects
     )
     both = discriminating_experiments("msd", spec, space, lag, [delay, slower])
     assert both[0].trial == found.trial
@@ -80,7 +84,7 @@ def test_one_hypothesis_against_several_equals_each_pair(proposal):
     alone = discriminating_experiment("msd", spec, space, lag, slower)
     assert both[1].trial == alone.trial
     assert both[1].separation == pytest.approx(alone.separation, rel=1e-9)
-    assert both[1].hypotheses == ("sensor_lag", "slower_lag")
+    assert both[1].hypotheses == ("output_lag", "slower_lag")
 
 
 def test_discrimination_report_shows_both_predictions_and_the_numbers(proposal, tmp_path):
@@ -88,7 +92,7 @@ def test_discrimination_report_shows_both_predictions_and_the_numbers(proposal, 
     page = write_discrimination_report(found, tmp_path / "rep").read_text()
     assert (tmp_path / "rep" / "discrimination.png").stat().st_size > 10_000
     assert 'src="discrimination.png"' in page
-    assert "sensor_lag" in page and "input_delay" in page
+    assert "output_lag" in page and "input_delay" in page
     assert f"chi2 = {found.expected_chi2:.4g}" in page
     for name, value in found.separation.items():
         assert name in page and f"{value:.4g}" in page

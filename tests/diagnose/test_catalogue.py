@@ -8,14 +8,23 @@ import numpy as np
 import pytest
 
 import fieldtruth as ft
+from fmuid.data import ParameterSpec
+from fmuid.discrepancy import effects as fx
+from fmuid.discrepancy.augment import AugmentedPredictor
+from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.estimation.predictor import FmuPredictor
-from fmuid.estimation.wrappers import AugmentedPredictor
+
+
+def _added(name: str) -> tuple[AddedParameter, ...]:
+    spec = ParameterSpec(start=0.1, lower=-1.0, upper=1.0, scale="lin")
+    return (AddedParameter(name, "", "", spec, 0.0, "inside"),)
+
 
 WRAPPERS = {
-    "sensor_lag": ("tau_sensor", ("sensor_lag", None)),
-    "steering_lag": ("tau_steer", ("steering_lag", "delta")),
-    "input_delay": ("delay_delta", ("input_delay", "delta")),
-    "steer_offset": ("offset_steer", ("steer_offset", "delta")),
+    "output_lag": ("tau_outputs", fx.OutputLag("", _added("tau_outputs"))),
+    "input_lag": ("tau_delta", fx.InputLag("delta", _added("tau_delta"))),
+    "input_delay": ("delay_delta", fx.InputDelay("delta", _added("delay_delta"))),
+    "input_offset": ("offset_delta", fx.InputOffset("delta", _added("offset_delta"))),
 }
 
 
@@ -27,7 +36,7 @@ def test_wrapper_matches_field_truth(tractor_fmu: Path, effect: str) -> None:
     t_in, u_in = exp.input_samples("delta")
     truth = ft.simulate_truth(case.truth, t_in, u_in, exp.time, effect, magnitude)
     name, wrapper = WRAPPERS[effect]
-    predictor = AugmentedPredictor(FmuPredictor(tractor_fmu, {}, ["delta"]), {name: wrapper})
+    predictor = AugmentedPredictor(FmuPredictor(tractor_fmu, {}, ["delta"]), (wrapper,))
     tires = {k: case.truth[k] for k in ft.BOUNDS}
     y = predictor.predict({**tires, name: magnitude}, exp, ["gam_t", "gam_i"])
     sigma = float(np.nanmax(exp.columns["sigma_gam_t"]))
@@ -35,7 +44,7 @@ def test_wrapper_matches_field_truth(tractor_fmu: Path, effect: str) -> None:
     assert np.max(np.abs(y[:, 1] - truth["gam_i"])) < 0.05 * sigma
 
 
-@pytest.mark.parametrize("effect", ["sensor_lag", "steering_lag"])
+@pytest.mark.parametrize("effect", ["output_lag", "input_lag"])
 def test_rows_a_rounding_error_apart_neither_blow_up_the_grid_nor_move_the_lag(
     tractor_fmu: Path, effect: str
 ) -> None:
@@ -48,7 +57,7 @@ def test_rows_a_rounding_error_apart_neither_blow_up_the_grid_nor_move_the_lag(
     twin = experiment_from_arrays("near.csv", near, columns)
     plain = experiment_from_arrays("plain.csv", time, {"delta": steer, "gam_t": np.zeros(61)})
     name, wrapper = WRAPPERS[effect]
-    predictor = AugmentedPredictor(FmuPredictor(tractor_fmu, {}, ["delta"]), {name: wrapper})
+    predictor = AugmentedPredictor(FmuPredictor(tractor_fmu, {}, ["delta"]), (wrapper,))
     values = {**ft.NOMINAL, name: 0.2}
     y_near = predictor.predict(values, twin, ["gam_t"])[:, 0]
     y_plain = predictor.predict(values, plain, ["gam_t"])[:, 0]

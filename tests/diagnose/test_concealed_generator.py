@@ -81,7 +81,7 @@ def recheck(tractor_fmu: Path, made: cc.ConcealedCase, added: str, bounds: tuple
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("effect", "added", "bounds"),
-    [("sensor_lag", "tau", (1e-4, 1.0)), ("steer_offset", "offset", (-0.05, 0.05))],
+    [("output_lag", "tau", (1e-4, 1.0)), ("input_offset", "offset", (-0.05, 0.05))],
 )
 def test_concealed_case_meets_the_criteria(
     tractor_fmu: Path, effect: str, added: str, bounds: tuple[float, float]
@@ -114,9 +114,9 @@ def test_ljung_box_matches_an_independent_sum() -> None:
 
 
 def test_the_same_seed_draws_the_same_case_and_effects_draw_apart() -> None:
-    a, b = cc.draw_design("steer_offset", 4), cc.draw_design("steer_offset", 4)
+    a, b = cc.draw_design("input_offset", 4), cc.draw_design("input_offset", 4)
     assert a.truth == b.truth and a.target_lambda == b.target_lambda
-    assert cc.draw_design("sensor_lag", 4).truth != a.truth
+    assert cc.draw_design("output_lag", 4).truth != a.truth
     assert cc.LAMBDA_RANGE[0] <= a.target_lambda <= cc.LAMBDA_RANGE[1]
     for _, _, _, t_out, sigma, snr in a.runs:
         assert 25.0 <= snr <= 100.0 and sigma > 0

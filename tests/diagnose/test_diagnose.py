@@ -66,7 +66,7 @@ def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
     assert set(result["parameters"]) == set(ft.BOUNDS)
     # the catalogue was scanned all the same, and found nothing at the 1 % level
     assert {c["effect"] for c in result["candidates"]} >= {
-        "sensor_lag", "input_delay", "steering_lag", "steer_offset", "gyro_bias",
+        "output_lag", "input_delay", "input_lag", "input_offset", "output_bias",
         "tire_saturation", "side_slope",
     }  # fmt: skip
     assert result["scan_p_value"] > 0.01
@@ -77,8 +77,8 @@ def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
 @pytest.mark.parametrize(
     ("effect", "parameter", "magnitude", "seed"),
     [
-        ("sensor_lag", "tau_sensor", 0.04, 8),
-        ("steer_offset", "offset_steer", 0.0004, 8),
+        ("output_lag", "tau_outputs", 0.04, 8),
+        ("input_offset", "offset_delta", 0.0004, 8),
         ("tire_saturation", "alpha_sat", 0.09, 5),
         ("side_slope", "slope", 0.004, 8),
     ],
@@ -115,19 +115,19 @@ def test_concealed_effect_is_found_named_and_sized(
 
 
 @pytest.mark.slow
-def test_a_steering_lag_and_the_same_lag_on_both_outputs_are_a_tie_no_test_settles(
+def test_a_input_lag_and_the_same_lag_on_both_outputs_are_a_tie_no_test_settles(
     tractor_fmu: Path,
 ) -> None:
-    case = ft.make_case("steering_lag", 0.05, seed=6, rate=5.0)
+    case = ft.make_case("input_lag", 0.05, seed=6, rate=5.0)
     result = diagnose(tractor_fmu, case.experiments, study_spec(), options=DiagnoseOptions(
         absorbed=False)).to_dict()  # fmt: skip
-    pair = {"steering_lag", "sensor_lag"}
+    pair = {"input_lag", "output_lag"}
     assert result["effect"] in pair
     (other,) = pair - {result["effect"]}
     tie = next(t for t in result["indistinguishable"] if t["effect"] == other)
     assert tie["test"] == "equal_predictions"
     assert other in result["verdict"]
-    name = "tau_steer" if other == "steering_lag" else "tau_sensor"
+    name = "tau_delta" if other == "input_lag" else "tau_outputs"
     assert tie["intervals"][name]["excludes_off"] is True
     # the two are equal for every input from rest, so no test settles the tie
     assert tie["expected_separation"] < 3.0

@@ -7,17 +7,21 @@ from typing import Any
 
 from fmuid.data import ParameterSpec
 from fmuid.discrepancy import explain
-from fmuid.discrepancy.catalogue import Candidate
 from fmuid.discrepancy.decide import Tie
+from fmuid.discrepancy.effects import DeclaredPhysics, Effect
 from fmuid.discrepancy.knowledge import AddedParameter
-from fmuid.discrepancy.result import AddedEstimate
+from fmuid.discrepancy.result import AddedEstimate, EffectStep, verdict
 from fmuid.discrepancy.settle import hypothesis_names
 
 
-def _candidate(effect: str, parameter: str) -> Candidate:
+def _candidate(effect: str, parameter: str) -> Effect:
     spec = ParameterSpec(start=0.0, lower=-1.0, upper=1.0, scale="lin")
     added = AddedParameter(parameter, "rad", "", spec, 0.0, "inside")
-    return Candidate(effect, (added,), None, "a shift of {value}")
+    return DeclaredPhysics("", (added,), declared=effect, description="a shift")
+
+
+def _step(effect: str, parameter: str, estimate: AddedEstimate) -> EffectStep:
+    return EffectStep(effect, effect, "a shift", {parameter: estimate}, 40.0, 20.0, 1e-5, 1e-4)
 
 
 def _tie(effect: str, parameter: str, p_value: float) -> Any:
@@ -26,33 +30,48 @@ def _tie(effect: str, parameter: str, p_value: float) -> Any:
 
 
 def test_a_bias_on_each_output_is_named_with_its_parameter() -> None:
-    named = _candidate("steer_offset", "offset_steer")
     estimate = AddedEstimate(0.01, (0.005, 0.015), 0.95, "rad", 0.0, True)
+    named = _step("input_offset", "offset_delta", estimate)
     ties = [
         _tie("side_slope", "slope", 0.4),
-        _tie("gyro_bias", "bias_gam_t", 0.3),
-        _tie("gyro_bias", "bias_gam_i", 0.2),
+        _tie("output_bias", "bias_gam_t", 0.3),
+        _tie("output_bias", "bias_gam_i", 0.2),
     ]
-    text = explain.explained([named], {"offset_steer": estimate}, 40.0, 20.0, 1e-5, ties, True)
+    text = explain.explained([named], 40.0, 20.0, 1e-5, ties, True)
     assert "side_slope (Vuong p = 0.4)" in text
-    assert "gyro_bias (bias_gam_t; Vuong p = 0.3)" in text
-    assert "gyro_bias (bias_gam_i; Vuong p = 0.2)" in text
+    assert "output_bias (bias_gam_t; Vuong p = 0.3)" in text
+    assert "output_bias (bias_gam_i; Vuong p = 0.2)" in text
 
 
 def test_settling_hypotheses_have_distinct_names() -> None:
     fits = [
-        SimpleNamespace(candidate=_candidate("gyro_bias", "bias_gam_t")),
-        SimpleNamespace(candidate=_candidate("gyro_bias", "bias_gam_i")),
+        SimpleNamespace(candidate=_candidate("output_bias", "bias_gam_t")),
+        SimpleNamespace(candidate=_candidate("output_bias", "bias_gam_i")),
         SimpleNamespace(candidate=_candidate("side_slope", "slope")),
     ]
     names = hypothesis_names(fits)  # type: ignore[arg-type]
-    assert names == ["gyro_bias (bias_gam_t)", "gyro_bias (bias_gam_i)", "side_slope"]
+    assert names == ["output_bias (bias_gam_t)", "output_bias (bias_gam_i)", "side_slope"]
 
 
 def test_a_generic_error_model_that_fits_as_well_is_said() -> None:
-    named = _candidate("tire_saturation", "alpha_sat")
     estimate = AddedEstimate(0.1, (0.05, 0.2), 0.95, "rad", 0.0, True)
+    named = _step("tire_saturation", "alpha_sat", estimate)
     rival = {"effect": "unexplained", "model": "Laguerre filters", "p_value": 0.65}
-    text = explain.explained([named], {"alpha_sat": estimate}, 40.0, 20.0, 1e-5, [], True, rival)
+    text = explain.explained([named], 40.0, 20.0, 1e-5, [], True, rival)
     assert "outside the catalogue (Laguerre filters) explains the data as well" in text
     assert "Vuong p = 0.65" in text
+    doc = {"mismatch": True, "effect": "tire_saturation", "lrt_p_value": 1e-5,
+           "indistinguishable": [rival], "effects": [{"effect": "tire_saturation"}]}  # fmt: skip
+    assert verdict(doc).startswith("Physics outside the catalogue explains the mismatch as well")
+
+
+def test_several_effects_and_held_out_errors_are_in_the_verdict() -> None:
+    doc = {
+        "mismatch": True, "effect": "steer_offset", "lrt_p_value": 1e-9,
+        "effects": [{"effect": "steer_offset"}, {"effect": "feedback_polynomial"}],
+        "validation": [{"experiment": "test.csv", "output": "x", "rms_base": 0.0071,
+                        "rms_final": 0.00098, "rms_by_step": [0.0069, 0.00098]}],
+    }  # fmt: skip
+    text = verdict(doc)
+    assert text.startswith("input_offset, then feedback_polynomial explain the mismatch")
+    assert "held-out RMS simulation error x 0.0071 -> 0.00098 (test.csv)" in text

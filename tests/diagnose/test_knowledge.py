@@ -5,11 +5,15 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from fmuid.data import spec_from_json
+import numpy as np
+import pytest
+
+from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.discrepancy.catalogue import catalogue
 from fmuid.discrepancy.knowledge import model_knowledge, read_annotations
+from fmuid.estimation.study import make_problem
 
-PACKAGE = Path(__file__).resolve().parents[2] / "service" / "fmuid" / "diagnose"
+PACKAGE = Path(__file__).resolve().parents[2] / "service" / "fmuid" / "discrepancy"
 
 
 def test_tractor_declares_its_switchable_physics_and_steer_input(tractor_fmu: Path) -> None:
@@ -23,7 +27,7 @@ def test_tractor_declares_its_switchable_physics_and_steer_input(tractor_fmu: Pa
     assert knowledge.role("delta") == "steer"
 
 
-def test_an_fmu_without_annotation_gets_generic_candidates_named_by_its_input(
+def test_an_fmu_without_annotation_gets_generic_effects_named_by_its_variables(
     msd_fmu: Path,
 ) -> None:
     spec = spec_from_json(
@@ -37,14 +41,30 @@ def test_an_fmu_without_annotation_gets_generic_candidates_named_by_its_input(
     )
     knowledge = model_knowledge(msd_fmu, spec)
     assert knowledge.physics == () and knowledge.role("f") is None
-    cands = catalogue(knowledge, spec, ["f"], ["x"], {"x": 1.0}, {"f": "N", "x": "m"})
-    names = {c.label for c in cands}
-    assert names == {
-        "sensor_lag(tau_sensor)", "input_delay(delay_f)", "steering_lag(tau_f)",
-        "steer_offset(offset_f)", "gyro_bias(bias_x)",
+    time = np.linspace(0.0, 4.0, 41)
+    exp = experiment_from_arrays("e.csv", time, {"f": np.sin(time), "x": 0.1 * np.sin(time)})
+    problem = make_problem(msd_fmu, [exp], spec)
+    effects = catalogue(problem, knowledge, {"k": 4.0})
+    assert {e.label for e in effects} == {
+        "input_offset(offset_f)", "input_gain(gain_f)", "input_lag(tau_f)",
+        "input_delay(delay_f)", "input_dead_zone(dead_f)", "input_saturation(limit_f)",
+        "output_lag(tau_outputs)", "output_gain(gain_x)", "output_bias(bias_x)",
+        "output_saturation(max_x)", "output_saturation(min_x)",
+        "feedback_polynomial(c2_x_f)", "feedback_polynomial(c3_x_f)",
+        "feedback_friction(coulomb_v_f)",
     }  # fmt: skip
-    text = " ".join(c.description for c in cands)
+    values = {p.name: p.spec.upper / 2 for e in effects for p in e.parameters}
+    text = " ".join(e.sentence(values) for e in effects)
     assert "steer" not in text and "gyro" not in text
+    # the FMU's units make the words: a force from a displacement is a spring, v is a rate
+    cubic = next(e for e in effects if e.names == ("c3_x_f",))
+    assert "hardening spring" in cubic.sentence({"c3_x_f": -1.0})
+    assert "softening spring" in cubic.sentence({"c3_x_f": 1.0})
+    friction = next(e for e in effects if e.effect == "feedback_friction")
+    assert friction.sentence({"coulomb_v_f": 0.2}).startswith("Coulomb friction: a force of 0.2 N")
+    # ranges from the data: a lag or a delay from below a sample to a fifth of the record
+    tau = next(e for e in effects if e.names == ("tau_f",)).parameters[0].spec
+    assert tau.lower == pytest.approx(0.1 / 20) and tau.upper == pytest.approx(4.0 / 5)
 
 
 def test_spec_physics_adds_to_the_declared_ones(tractor_fmu: Path) -> None:

@@ -6,7 +6,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from fmuid.discrepancy import residual_tests as rt
-from fmuid.estimation.wrappers import first_order_lag
+from fmuid.discrepancy.augment import first_order_lag
 
 
 def _series(r: np.ndarray, dt: float = 0.2, seed: int = 0) -> rt.Series:

@@ -69,3 +69,15 @@ def test_emps_matches_scipy(
     np.testing.assert_allclose(y[:, 0], q, rtol=0, atol=tolerance * np.ptp(q))
     np.testing.assert_allclose(y[:, 1], vir, rtol=0, atol=tolerance * np.ptp(vir))
     np.testing.assert_allclose(y[:, 2], v, rtol=0, atol=tolerance * np.ptp(v))
+
+
+def test_an_external_force_acts_on_the_load_as_a_negative_offset(
+    built_fmus: dict[str, Path],
+) -> None:
+    sim = Simulator(built_fmus["emps"])
+    q_ref = np.interp(T, CORNERS, Q_CORNERS)
+    pushed = sim.simulate(START, T, {"q_ref": q_ref, "f_ext": np.full(T.size, 12.0)}, T, ["qm"])
+    offset = sim.simulate({**START, "offset": -12.0}, T, {"q_ref": q_ref}, T, ["qm"])
+    sim.close()
+    np.testing.assert_allclose(pushed, offset, rtol=0, atol=1e-12)
+    assert np.max(np.abs(pushed - np.interp(T, CORNERS, Q_CORNERS)[:, None])) > 1e-6

@@ -49,7 +49,9 @@ def test_output_order_and_duplicates(tractor: Simulator) -> None:
     full = _ramp(tractor, {})
     t = OUTPUT_TIME[[5, 0, 5, 50]]
     y = tractor.simulate({}, RAMP_TIME, {"delta": RAMP_DELTA}, t, ["x_ic", "gam_t"])
-    np.testing.assert_allclose(y, full[[5, 0, 5, 50]][:, [2, 0]], rtol=0, atol=1e-12)
+    # another communication grid: the FMU's error-controlled steps differ within its tolerance
+    np.testing.assert_allclose(y, full[[5, 0, 5, 50]][:, [2, 0]], rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(y[0], y[2])
     assert y[1, 1] == 0.0
 
 
@@ -87,7 +89,7 @@ def test_fmi_error_raises_and_instance_recovers(tractor: Simulator) -> None:
     with pytest.raises(FmuError, match="not finite") as info:
         _ramp(tractor, {"C_atf": float("nan")})
     assert info.value.function == "fmi2SetReal"
-    with pytest.raises(FmuError, match="non-finite") as info:
+    with pytest.raises(FmuError, match="too stiff") as info:
         _ramp(tractor, {"sig_tf": 1e-9})
     assert info.value.function == "fmi2DoStep"
     assert "t = " in str(info.value)

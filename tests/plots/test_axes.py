@@ -142,7 +142,7 @@ def diagnosis_inputs(msd_fmu: Path) -> tuple[Diagnosis, DiagnosisSeries]:
     diagnosis = Diagnosis(
         mismatch=True, false_alarm=0.01, evidence=(), tests_before=(), tests_after=(),
         location={"frequency_hz": [1.0, 2.0]},
-        windows=(Window(problem.experiments[1].name, "v", 1.0, 2.0, 3.0),), effect="sensor_lag",
+        windows=(Window(problem.experiments[1].name, "v", 1.0, 2.0, 3.0),), effect="output_lag",
         description="", candidates=(), added_parameters={}, chi2_before=1.0, chi2_after=1.0,
         n_data=164, lrt_p_value=None, bic_before=1.0, bic_after=1.0,
         parameters_before={"k": 4.0}, parameters_after={"k": 4.0},

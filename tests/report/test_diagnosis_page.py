@@ -17,11 +17,11 @@ class _Unexplained:
                           "p_value": 1e-8, "statistic": 80.0, "df": 20.0}],
             "location": {"outputs": ["x"], "experiments": ["a.csv"], "time_windows": [[1, 2]],
                          "frequency_hz": [0.5, 1.0], "chi2_gain": {"a.csv/x": 12.0}},
-            "candidates": [{"effect": "gyro_bias", "parameters": {"bias_x": 0.1}, "chi2": 90.0,
+            "candidates": [{"effect": "output_bias", "parameters": {"bias_x": 0.1}, "chi2": 90.0,
                             "p_value": 0.2, "statistic": 1.0, "p_adjusted": 0.5, "stage": 1}],
-            "indistinguishable": [{"effect": "sensor_lag", "parameters": {"tau_sensor": 0.1},
+            "indistinguishable": [{"effect": "output_lag", "parameters": {"tau_outputs": 0.1},
                                    "chi2": 91.0, "test": "equal_predictions", "p_value": 1.0,
-                                   "intervals": {"tau_sensor": {"estimate": 0.1}}}],
+                                   "intervals": {"tau_outputs": {"estimate": 0.1}}}],
             "added_parameters": {},
             "absorbed": {},
             "generic_correction": {
@@ -48,7 +48,7 @@ def test_no_python_literal_reaches_the_page_and_units_show(tmp_path):
     assert body.index("Verdict") < body.index("Summary")
     assert re.search(r"k\s+N/m\s+4\.4\s+4\.4", body)
     assert "0.8 Hz, damping ratio 0.1" in body
-    assert "tau_sensor = 0.1" in body and "bias_x = 0.1" in body
+    assert "tau_outputs = 0.1" in body and "bias_x = 0.1" in body
 
 
 def test_fmt_writes_mappings_and_lists_as_text():
@@ -68,9 +68,9 @@ def _proposal():
     lag = {"x": np.tanh(time), "v": np.cosh(time) ** -2}
     delay = {"x": np.tanh(time - 0.1), "v": np.cosh(time - 0.1) ** -2}
     found = Discrimination(
-        trial, ("sensor_lag", "input_delay"),
-        {"input_delay fitted to sensor_lag": 41.5, "sensor_lag fitted to input_delay": 38.25},
-        time, {"sensor_lag": lag, "input_delay": delay}, "f", 24, {"x": 0.005, "v": 0.01},
+        trial, ("output_lag", "input_delay"),
+        {"input_delay fitted to output_lag": 41.5, "output_lag fitted to input_delay": 38.25},
+        time, {"output_lag": lag, "input_delay": delay}, "f", 24, {"x": 0.005, "v": 0.01},
     )  # fmt: skip
     return found
 
@@ -89,7 +89,7 @@ def test_a_settling_test_round_trips_through_json():
 
 def test_the_settling_test_gets_its_table_and_figure(tmp_path):
     doc = _Unexplained().to_dict()
-    doc.update(effect="sensor_lag", discriminating_experiment=_proposal().to_dict())
+    doc.update(effect="output_lag", discriminating_experiment=_proposal().to_dict())
 
     class _Named:
         def to_dict(self):
@@ -97,8 +97,8 @@ def test_the_settling_test_gets_its_table_and_figure(tmp_path):
 
     text = html.unescape(write_report(_Named(), tmp_path).read_text())
     body = re.sub(r"<[^>]+>", " ", text.split("<body>")[1])
-    assert "The test that tells sensor_lag from input_delay" in body
+    assert "The test that tells output_lag from input_delay" in body
     assert "step (amplitude 1, time 1), 6 s at 10 Hz, driving f, measuring x, v" in body
-    assert re.search(r"sensor_lag fitted to input_delay\s+38\.25", body)
+    assert re.search(r"output_lag fitted to input_delay\s+38\.25", body)
     assert re.search(r"x\s+0\.005", body)
     assert (tmp_path / "discrimination.png").stat().st_size > 1000

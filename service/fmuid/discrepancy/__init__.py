@@ -1,54 +1,27 @@
-"""Model discrepancy: locate a mismatch, name the left-out physics, model it, show the gain."""
+"""Model discrepancy: locate a mismatch, name the left-out physics, model it, show the gain.
+
+The package's names are imported on first use, so that :mod:`.effects` and :mod:`.augment`
+(which the experiment design uses) load without the diagnosis engine.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from pathlib import Path
-
-from fmuid.data import Experiment, Spec
-from fmuid.discrepancy.engine import DiagnoseOptions, diagnose_problem
-from fmuid.discrepancy.result import Diagnosis
-from fmuid.estimation.problem import Problem
-from fmuid.model.fmu import FmuModel
-from fmuid.progress import ProgressCallback
+import importlib
+from typing import Any
 
 __all__ = ["DiagnoseOptions", "Diagnosis", "diagnose", "diagnose_problem"]
 
+_HOMES = {
+    "DiagnoseOptions": "fmuid.discrepancy.engine",
+    "diagnose_problem": "fmuid.discrepancy.engine",
+    "Diagnosis": "fmuid.discrepancy.result",
+    "diagnose": "fmuid.discrepancy.study",
+}
 
-def diagnose(
-    fmu_path: str | Path | FmuModel,
-    experiments: Sequence[Experiment],
-    spec: Spec,
-    progress: ProgressCallback | None = None,
-    options: DiagnoseOptions = DiagnoseOptions(),
-    problem: Problem | None = None,
-) -> Diagnosis:
-    """Fit the spec's model, test its residuals and explain a mismatch by left-out physics.
 
-    Parameters
-    ----------
-    fmu_path
-        A parsed FMU, an FMU file (FMI 2.0 or 3.0), or the name of a built-in model (e.g.
-        ``"msd"``).
-    experiments
-        Datasets sharing the parameters.
-    spec
-        The study; ``physics`` may declare the FMU's switchable physics.
-    progress
-        Receives ``Progress("diagnose", done, total, detail)`` events.
-    options
-        Levels and effort (default: false-alarm level 0.01, 95% intervals).
-    problem
-        The problem ``fmuid.estimation.study.make_problem`` built of these inputs (default:
-        built here).
-
-    Returns
-    -------
-    Diagnosis
-        ``.to_dict()`` gives the contract's JSON.
-
-    """
-    from fmuid.estimation.study import make_problem
-
-    problem = problem or make_problem(fmu_path, experiments, spec)
-    return diagnose_problem(problem, options=options, progress=progress)
+def __getattr__(name: str) -> Any:
+    """Import a public name from its module on first use."""
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'fmuid.discrepancy' has no attribute {name!r}")
+    return getattr(importlib.import_module(home), name)

@@ -1,179 +1,291 @@
-"""Catalogue of left-out physics: candidates that each add one or more parameters to a model.
+"""Catalogue of left-out physics: the effects (:mod:`.effects`) that apply to a study.
 
-Generic candidates wrap any FMU (:mod:`fmuid.estimation.wrappers`: they act on its inputs or
-outputs); physics candidates switch on FMU parameters that are off by default, as the FMU
-declares them or the spec lists them (:mod:`.knowledge`). Names and units follow the
-contract's table.
+Physics the FMU declares (or the spec lists) comes first; then the patterns that wrap any FMU.
+Ranges come from the data and the FMU, never from one model:
 
-=================  ====================  =================================================
-effect             parameter             acts as
-=================  ====================  =================================================
-sensor_lag         tau_sensor [s]        measured outputs = first-order lag of the model's
-input_delay        delay_<input> [s]     the FMU sees the input ``delay`` seconds late
-steering_lag       tau_<input> [s]       the FMU sees the input through a first-order lag
-steer_offset       offset_<input>        the FMU sees input + offset
-gyro_bias          bias_<output>         measured output = model output + bias
-(declared)         (declared)            FMU physics switched on (e.g. ``tire_saturation``
-                                         ``alpha_sat``, ``side_slope`` ``slope``)
-=================  ====================  =================================================
+=====================  ==========================  ===========================================
+effect                 parameter                   range
+=====================  ==========================  ===========================================
+input_offset           offset_<input>              +-half the input's largest magnitude
+input_gain             gain_<input>                0.5 to 2 (off at 1)
+input_dead_zone        dead_<input>                0 to the 60 % quantile of the input's size
+input_saturation       limit_<input>               its 50 % quantile to its largest size (off)
+input_lag, delay       tau_<input>, delay_<input>  a 20th of the median sample interval to a
+                                                   fifth of the record (log scale, off at 0)
+output_lag             tau_outputs, tau_<output>   as the input lag
+output_gain, bias      gain_<output>, bias_<...>   0.5 to 2; +-half the output's magnitude
+output_saturation      max_<output>, min_<output>  from the median to past the data's extreme
+feedback_polynomial    c<k>_<output>_<input>       k = 2, 3: +-4 u / y^k (u, y: magnitudes)
+feedback_friction      coulomb_<rate>_<input>      +-u; smooth sign over 2 % of the rate
+=====================  ==========================  ===========================================
 
-An input whose declared role is ``steer`` gives ``tau_steer`` and ``offset_steer`` (the
-contract's names for a vehicle's steer input) and descriptions that speak of steering.
+Threshold effects (dead zone, saturations) have no sensitivity at their off level: their screen
+probes levels inside the range the signals reach (quantiles of the data), not the off level.
+Feedback goes into every real input of a co-simulation FMU, driven by the data or not (an
+undriven input is where an FMU lets a force act from outside); its rate is an output whose unit
+is the level's per second, else the finite difference of the level.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
-from fmuid.data import ParameterSpec, Spec
+from fmuid.data import ParameterSpec
+from fmuid.discrepancy import effects as fx
 from fmuid.discrepancy.knowledge import AddedParameter, ModelKnowledge, model_knowledge
 from fmuid.estimation.problem import Problem
 
+POWERS = (2, 3)
+"""Powers of the polynomial feedback candidates (the linear term is the model's own)."""
+
+FRICTION_WIDTH = 0.02
+"""Width of the smooth sign of a friction term, as a share of the rate's largest magnitude."""
+
+SPREAD = (0.003, 0.02, 0.1, 0.4, 1.0)
+"""Shares of its bound at which a nonlinear term's coefficient is screened (each sign)."""
+
+LEVELS = (0.5, 0.7, 0.8, 0.9, 0.95, 0.98)
+"""Quantiles of a signal's size at which a threshold effect is screened."""
+
 
 @dataclass(frozen=True)
-class Candidate:
-    """One candidate of left-out physics.
+class Signals:
+    """What the data say about the sizes of a study's signals.
 
     Attributes
     ----------
-    effect
-        Catalogue name (or the declared physics' name).
-    parameters
-        The added parameters.
-    wrapper
-        For generic candidates, what the wrapper does: ``("sensor_lag", None)``,
-        ``("input_delay", input)``, ``("steering_lag", input)``, ``("steer_offset", input)``,
-        ``("gyro_bias", output)``; ``None`` for FMU physics.
-    description
-        One sentence on the effect, with ``{value}`` for the estimate.
+    inputs, outputs
+        Samples of each driven input and fitted output, all experiments together.
+    rates
+        Largest magnitude of each rate a friction term may use, by source name.
+    interval, record
+        Median sample interval and longest record [s].
 
     """
 
-    effect: str
-    parameters: tuple[AddedParameter, ...]
-    wrapper: tuple[str, str | None] | None
-    description: str
+    inputs: Mapping[str, np.ndarray]
+    outputs: Mapping[str, np.ndarray]
+    rates: Mapping[str, float]
+    interval: float
+    record: float
 
-    @property
-    def label(self) -> str:
-        """Unique label: the effect and its parameter names."""
-        return f"{self.effect}({', '.join(p.name for p in self.parameters)})"
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Names of the added parameters."""
-        return tuple(p.name for p in self.parameters)
+    def size(self, name: str) -> float:
+        """Largest magnitude of an input or output in the data (1 when it is not driven)."""
+        values = self.inputs.get(name, self.outputs.get(name))
+        if values is None or not values.size:
+            return 1.0
+        return max(float(np.max(np.abs(values))), 1e-12)
 
 
-def _time_constant(name: str, meaning: str) -> AddedParameter:
-    spec = ParameterSpec(start=0.05, lower=0.005, upper=1.0, scale="log")
-    return AddedParameter(name, "s", meaning, spec, 0.0, "low")
+def _spec(start: float, lower: float, upper: float, scale: Literal["log", "lin"]) -> ParameterSpec:
+    return ParameterSpec(start=start, lower=lower, upper=upper, scale=scale)
 
 
-def _input_candidates(name: str, unit: str, steer: bool) -> list[Candidate]:
-    """Delay, lag and offset of one input."""
-    tag = "steer" if steer else name
-    what = "the steer input" if steer else f"input {name}"
-    delay = AddedParameter(
-        f"delay_{name}", "s", f"dead time on {what}",
-        ParameterSpec(start=0.05, lower=0.005, upper=1.0, scale="log"), 0.0, "low",
-    )  # fmt: skip
-    offset = AddedParameter(
-        f"offset_{tag}", unit, f"constant offset on {what}",
-        ParameterSpec(start=0.0, lower=-0.05, upper=0.05, scale="lin"), 0.0, "inside",
-    )  # fmt: skip
-    actuator = "steering actuator" if steer else "actuator"
-    return [
-        Candidate(
-            "input_delay", (delay,), ("input_delay", name),
-            f"the model sees {what} about {{value}} s late (dead time)",
-        ),
-        Candidate(
-            "steering_lag", (_time_constant(f"tau_{tag}", f"first-order lag of {what}"),),
-            ("steering_lag", name),
-            f"{what} acts through a first-order {actuator} lag of time constant {{value}} s",
-        ),
-        Candidate(
-            "steer_offset", (offset,), ("steer_offset", name),
-            f"{what} carries a constant offset of {{value}} {unit}".rstrip(),
-        ),
-    ]  # fmt: skip
+def _time_constant(name: str, meaning: str, s: Signals) -> AddedParameter:
+    lower = s.interval / 20
+    upper = max(s.record / 5, 10 * lower)
+    decades = np.log10(upper / lower)
+    points = min(int(2 * decades) + 2, 10)
+    grid = tuple(np.logspace(np.log10(lower), np.log10(upper), points).tolist())
+    start = float(np.sqrt(lower * upper))
+    return AddedParameter(name, "s", meaning, _spec(start, lower, upper, "log"), 0.0, "low",
+                          probe=lower, grid=grid)  # fmt: skip
+
+
+def _signed(name: str, unit: str, meaning: str, bound: float) -> AddedParameter:
+    return AddedParameter(name, unit, meaning, _spec(0.0, -bound, bound, "lin"), 0.0, "inside")
+
+
+def _nonlinear(name: str, unit: str, meaning: str, bound: float) -> AddedParameter:
+    """Return a signed coefficient of a nonlinear term, probed at 1 % of its bound.
+
+    Its screen tries a grid spread over three decades on both sides (its effect is far from
+    linear in the coefficient).
+    """
+    steps = [f * bound for f in SPREAD]
+    grid = tuple(sorted([*steps, *(-v for v in steps)]))
+    return AddedParameter(name, unit, meaning, _spec(0.0, -bound, bound, "lin"), 0.0, "inside",
+                          probe=0.01 * bound, grid=grid)  # fmt: skip
+
+
+def _gain(name: str, meaning: str) -> AddedParameter:
+    return AddedParameter(name, "1", meaning, _spec(1.0, 0.5, 2.0, "lin"), 1.0, "inside")
+
+
+def _quantiles(values: np.ndarray, levels: tuple[float, ...]) -> tuple[float, ...]:
+    return tuple(float(q) for q in np.quantile(values, levels))
+
+
+def _input_effects(name: str, unit: str, s: Signals, w: fx.Words) -> list[fx.Effect]:
+    size = np.abs(s.inputs[name])
+    top = s.size(name)
+    what = f"input {name}"
+    out: list[fx.Effect] = [
+        fx.InputOffset(name, (_signed(f"offset_{name}", unit, f"offset on {what}", top / 2),), w),
+        fx.InputGain(name, (_gain(f"gain_{name}", f"gain on {what}"),), w),
+        fx.InputLag(name, (_time_constant(f"tau_{name}", f"first-order lag of {what}", s),), w),
+        fx.InputDelay(name, (_time_constant(f"delay_{name}", f"dead time on {what}", s),), w),
+    ]
+    dead = _quantiles(size, (0.05, 0.1, 0.2, 0.3, 0.45, 0.6))
+    if dead[-1] > 0:
+        p = AddedParameter(
+            f"dead_{name}", unit, f"dead zone of {what}", _spec(0.0, 0.0, dead[-1], "lin"),
+            0.0, "low", probe=dead[2], grid=dead,
+        )  # fmt: skip
+        out.append(fx.InputDeadZone(name, (p,), w))
+    limits = _quantiles(size, LEVELS)
+    if limits[0] < top:
+        p = AddedParameter(
+            f"limit_{name}", unit, f"saturation of {what}", _spec(top, limits[0], top, "lin"),
+            top, "high", probe=limits[-2], grid=limits,
+        )  # fmt: skip
+        out.append(fx.InputSaturation(name, (p,), w))
+    return out
+
+
+def _output_effects(name: str, unit: str, s: Signals, w: fx.Words) -> list[fx.Effect]:
+    y = s.outputs[name]
+    top = s.size(name)
+    what = f"output {name}"
+    out: list[fx.Effect] = [
+        fx.OutputGain(name, (_gain(f"gain_{name}", f"gain on {what}"),), w),
+        fx.OutputBias(name, (_signed(f"bias_{name}", unit, f"bias on {what}", top / 2),), w),
+    ]
+    span = float(np.max(y) - np.min(y)) if y.size else 0.0
+    if span > 0:
+        high = _quantiles(y, LEVELS)
+        upper = float(np.max(y)) + span / 4
+        p = AddedParameter(
+            f"max_{name}", unit, f"upper limit of {what}", _spec(upper, high[0], upper, "lin"),
+            upper, "high", probe=high[-2], grid=(*high, float(np.max(y))),
+        )  # fmt: skip
+        out.append(fx.OutputSaturation(name, (p,), w, upper=True))
+        low = _quantiles(y, tuple(1 - q for q in LEVELS))
+        lower = float(np.min(y)) - span / 4
+        p = AddedParameter(
+            f"min_{name}", unit, f"lower limit of {what}", _spec(lower, lower, low[0], "lin"),
+            lower, "low", probe=low[-2], grid=(*low, float(np.min(y))),
+        )  # fmt: skip
+        out.append(fx.OutputSaturation(name, (p,), w, upper=False))
+    return out
+
+
+def _feedback_effects(
+    problem: Problem, s: Signals, w: fx.Words, rate_of: Mapping[str, tuple[str, bool]]
+) -> list[fx.Effect]:
+    targets = [n for n, v in problem.model.inputs.items() if v.is_continuous]
+    out: list[fx.Effect] = []
+    for u in targets:
+        u_size = s.size(u)
+        for y in problem.outputs:
+            y_size = s.size(y)
+            for k in POWERS:
+                name = f"c{k}_{y}_{u}"
+                unit = f"{w.unit(u)}/{w.unit(y)}^{k}" if w.unit(u) or w.unit(y) else ""
+                p = _nonlinear(name, unit, f"{y}^{k} fed into {u}", 4 * u_size / y_size**k)
+                out.append(fx.FeedbackPolynomial(u, (p,), w, source=y, power=k))
+        for source, (rate, derivative) in rate_of.items():
+            width = FRICTION_WIDTH * s.rates.get(source, 1.0)
+            p = _nonlinear(f"coulomb_{rate}_{u}", w.unit(u), f"Coulomb friction on {u}", u_size)
+            out.append(
+                fx.FeedbackFriction(u, (p,), w, source=source, derivative=derivative, width=width)
+            )
+    return out
+
+
+def rate_sources(problem: Problem, units: Mapping[str, str]) -> dict[str, tuple[str, bool]]:
+    """Rates a friction term can use: ``{source: (rate name, by finite difference)}``.
+
+    An FMU output whose unit is a fitted output's unit per second is that output's rate; a
+    fitted output whose unit is already per second is a rate itself; otherwise the finite
+    difference of the fitted output is its rate (named ``d<output>``).
+    """
+    out: dict[str, tuple[str, bool]] = {}
+    for y in problem.outputs:
+        unit = units.get(y, "")
+        if unit.endswith("/s"):
+            out[y] = (y, False)
+            continue
+        match = [o for o in problem.model.outputs if unit and units.get(o) == f"{unit}/s"]
+        if match:
+            out[match[0]] = (match[0], False)
+        else:
+            out[y] = (f"d{y}", True)
+    return out
+
+
+def signals(
+    problem: Problem, rates: Mapping[str, tuple[str, bool]], values: Mapping[str, float]
+) -> Signals:
+    """Sizes of the study's signals, and of the rates (an unfitted one simulated at ``values``)."""
+    inputs = {
+        name: np.concatenate([exp.input_samples(name)[1] for exp in problem.experiments])
+        for name in problem.inputs
+    }
+    outputs = {
+        o: np.concatenate([d[j] for d in problem.data]) for j, o in enumerate(problem.outputs)
+    }
+    gaps = np.concatenate([np.diff(exp.time) for exp in problem.experiments])
+    record = max(float(exp.time[-1] - exp.time[0]) for exp in problem.experiments)
+    sizes: dict[str, float] = {}
+    for source, (_, derivative) in rates.items():
+        if source in outputs and not derivative:
+            sizes[source] = float(np.max(np.abs(outputs[source])))
+            continue
+        if derivative:
+            j = problem.outputs.index(source)
+            per = [
+                np.diff(d[j]) / np.diff(e.time[ms[j]])
+                for e, d, ms in zip(problem.experiments, problem.data, problem.masks)
+                if ms[j].sum() > 2
+            ]
+            sizes[source] = float(np.quantile(np.abs(np.concatenate(per)), 0.95)) if per else 1.0
+            continue
+        exp = problem.experiments[0]
+        y = problem.predictor.predict(values, exp, [source])
+        problem.simulations += 1
+        sizes[source] = float(np.max(np.abs(y)))
+    interval = float(np.median(gaps[gaps > 0])) if np.any(gaps > 0) else 1.0
+    return Signals(inputs, outputs, {k: max(v, 1e-12) for k, v in sizes.items()}, interval, record)
 
 
 def catalogue(
-    knowledge: ModelKnowledge,
-    spec: Spec,
-    inputs: Sequence[str],
-    outputs: Sequence[str],
-    output_scale: Mapping[str, float],
-    units: Mapping[str, str] | None = None,
-) -> list[Candidate]:
-    """Return every candidate that applies to a study.
+    problem: Problem, knowledge: ModelKnowledge, values: Mapping[str, float]
+) -> list[fx.Effect]:
+    """Return every effect that applies to a study (declared physics first).
 
-    Parameters
-    ----------
-    knowledge
-        The model's switchable physics and variable roles.
-    spec
-        The study; candidates whose parameters are already free or fixed are left out.
-    inputs, outputs
-        The FMU inputs driven and the outputs fitted.
-    output_scale
-        Largest absolute data value per output, to bound the biases.
-    units
-        Unit per input and output, for the added parameters.
-
+    ``values`` are the base model's parameters (its fit). Effects whose parameters the spec
+    already fits or fixes are left out.
     """
-    units = units or {}
-    taken = set(spec.parameters) | set(spec.fixed)
-    out: list[Candidate] = [
-        Candidate(
-            "sensor_lag",
-            (_time_constant("tau_sensor", "time constant of a first-order lag on the outputs"),),
-            ("sensor_lag", None),
-            "the measured outputs lag the model by a first-order filter of time constant {value} s",
-        )
-    ]
-    for name in inputs:
-        out.extend(_input_candidates(name, units.get(name, ""), knowledge.role(name) == "steer"))
-    for name in outputs:
-        bound = max(0.25 * float(output_scale.get(name, 1.0)), 1e-12)
-        unit = units.get(name, "")
-        bias = AddedParameter(
-            f"bias_{name}", unit, f"constant bias on output {name}",
-            ParameterSpec(start=0.0, lower=-bound, upper=bound, scale="lin"), 0.0, "inside",
-        )  # fmt: skip
-        out.append(
-            Candidate(
-                "gyro_bias",
-                (bias,),
-                ("gyro_bias", name),
-                f"output {name} is recorded with a constant bias of {{value}} {unit}".rstrip(),
-            )  # fmt: skip
-        )
-    for physics in knowledge.physics:
-        out.append(
-            Candidate(
-                physics.effect,
-                physics.parameters,
-                None,
-                f"{physics.description} ({physics.parameters[0].name} = {{value}} "
-                f"{physics.parameters[0].unit})".replace(" )", ")"),
-            )  # fmt: skip
-        )
-    return [c for c in out if not set(c.names) & taken]
-
-
-def study_catalogue(problem: Problem) -> list[Candidate]:
-    """Return the catalogue of an estimation problem (its FMU's knowledge, spec, data, units)."""
-    scale = {
-        o: max(float(np.max(np.abs(np.concatenate([d[j] for d in problem.data])))), 1e-12)
-        for j, o in enumerate(problem.outputs)
-    }
     variables = {**problem.model.inputs, **problem.model.outputs}
     units = {name: v.unit or "" for name, v in variables.items()}
-    knowledge = model_knowledge(problem.fmu_path, problem.spec)
-    return catalogue(knowledge, problem.spec, problem.inputs, problem.outputs, scale, units)
+    words = fx.Words(units, dict(knowledge.roles))
+    rates = rate_sources(problem, units)
+    s = signals(problem, rates, values)
+    out: list[fx.Effect] = [
+        fx.DeclaredPhysics("", p.parameters, declared=p.effect, description=p.description)
+        for p in knowledge.physics
+    ]
+    for name in problem.inputs:
+        if problem.model.inputs[name].is_continuous:
+            out.extend(_input_effects(name, units[name], s, words))
+    lag = _time_constant("tau_outputs", "time constant of a first-order lag on the outputs", s)
+    out.append(fx.OutputLag("", (lag,), words))
+    for name in problem.outputs:
+        if len(problem.outputs) > 1:
+            tau = _time_constant(f"tau_{name}", f"first-order lag of output {name}", s)
+            out.append(fx.OutputLag(name, (tau,), words))
+        out.extend(_output_effects(name, units.get(name, ""), s, words))
+    if problem.model.is_cosimulation:
+        out.extend(_feedback_effects(problem, s, words, rates))
+    taken = set(problem.spec.parameters) | set(problem.spec.fixed)
+    return [e for e in out if not set(e.names) & taken]
+
+
+def study_catalogue(problem: Problem, values: Mapping[str, float]) -> list[fx.Effect]:
+    """Return the catalogue of an estimation problem at its fitted ``values``."""
+    return catalogue(problem, model_knowledge(problem.fmu_path, problem.spec), values)

@@ -11,19 +11,21 @@
    agreement test and the residual tests. A candidate is named when it is significant after the
    scan's adjustment and the augmented model's residuals pass; candidates that explain the
    data equally well are listed (Vuong's test, or equal predictions).
-4. **Refine**: if residual tests still fail, the other candidates are scanned on top of the
-   first (and the first dropped if the second alone does as well); otherwise the mismatch is
-   ``unexplained`` and a generic correction (:mod:`.correction`) describes it.
+4. **Add** (:mod:`.forward`): effects one after another while a round's best candidate is
+   significant on top of the model so far; when none is, the mismatch is ``unexplained`` and
+   a generic correction (:mod:`.correction`) describes it (also the misfit a named model
+   leaves, when its residuals still fail).
 5. **Profile**: the added parameters' intervals, and the original parameters' intervals and
    labels before and after the augmentation (:mod:`.absorb`); on a tie, the test like the
-   data's that would settle it (:mod:`.settle`).
-6. **Explain** (:mod:`.explain`).
+   data's that would settle it (:mod:`.settle`); the fine grid's coupling error; each model
+   simulated on held-out data (:mod:`.validate`).
+6. **Explain** (:mod:`.explain`), and where in the outputs' range the misfit sat
+   (:mod:`.levels`).
 """
 
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -31,30 +33,31 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from fmuid.data import Experiment
 from fmuid.discrepancy import decide, explain, locate
 from fmuid.discrepancy import residual_tests as rt
 from fmuid.discrepancy.absorb import absorbed
-from fmuid.discrepancy.catalogue import Candidate, study_catalogue
+from fmuid.discrepancy.catalogue import study_catalogue
 from fmuid.discrepancy.correction import arx_correction
+from fmuid.discrepancy.forward import Step, forward
 from fmuid.discrepancy.generic import describe, generic_rival, generic_test, local_model
-from fmuid.discrepancy.knowledge import AddedParameter
-from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis
-from fmuid.discrepancy.scan import CandidateFit, Scanner, augmented, scan
+from fmuid.discrepancy.levels import level_location
+from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
+from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
+from fmuid.discrepancy.scan import CandidateFit, augmented
 from fmuid.discrepancy.settle import settles, settling_tests
+from fmuid.discrepancy.validate import coupling_error, validation
 from fmuid.estimation.optimize import (
     FitOptions,
     fit_problem,
-    jacobian,
-    make_fit_result,
-    refine,
     safe_residuals,
 )
 from fmuid.estimation.problem import Problem
-from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.result import FitResult
+from fmuid.estimation.series import residual_series as fit_series
 from fmuid.profiling.engine import profile_problem
-from fmuid.profiling.result import ProfileResult
 from fmuid.profiling.walk import WalkOptions
-from fmuid.progress import Progress, ProgressCallback
+from fmuid.progress import ProgressCallback
 
 log = logging.getLogger(__name__)
 
@@ -106,91 +109,6 @@ class DiagnoseOptions:
     )
 
 
-def _fit_of(problem: Problem, z: np.ndarray, chi2: float, t0: float) -> FitResult:
-    return make_fit_result(problem, z, chi2, jacobian(problem, z), "", False, t0, 0)
-
-
-def _score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
-    return CandidateScore(
-        f.candidate.effect, f.values, f.chi2, f.p_value, f.bic, f.stage, f.statistic,
-        p_adjusted, f.fitted,
-    )  # fmt: skip
-
-
-def _added_estimates(
-    prof: ProfileResult, added: Sequence[AddedParameter], confidence: float
-) -> dict[str, AddedEstimate]:
-    """Estimates, intervals and off-value checks of the added parameters from their profiles."""
-    return {
-        p.name: AddedEstimate.of(
-            prof.fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise, confidence
-        )
-        for p in added
-    }
-
-
-class _Run:
-    """State of one diagnosis: the problem, options, progress and the simulations spent."""
-
-    def __init__(self, problem: Problem, opts: DiagnoseOptions, progress: ProgressCallback | None):
-        self.problem = problem
-        self.opts = opts
-        self.progress = progress
-        self.t0 = time.perf_counter()
-        self.sims0 = problem.simulations
-        self.made: dict[int, Problem] = {}
-        self.extra = 0
-        self.done = 0
-        self.total = 1
-
-    def spent(self) -> int:
-        made = sum(p.simulations for p in self.made.values())
-        return self.problem.simulations - self.sims0 + made + self.extra
-
-    def report(self, detail: str) -> None:
-        self.done += 1
-        if self.progress:
-            self.progress(Progress("diagnose", self.done, max(self.total, self.done), detail))
-
-    def scan_round(
-        self, scanner: Scanner, pool: list[Candidate], stage: int
-    ) -> tuple[list[CandidateFit], list[float]]:
-        def seen(f: CandidateFit) -> None:
-            self.made[id(f.problem)] = f.problem
-            self.report(f"round {stage}: {f.candidate.label} chi2 {f.chi2:.4g}")
-
-        fits = scan(
-            scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
-            options=self.opts.fit, stage=stage, on_candidate=seen,
-        )  # fmt: skip
-        return fits, decide.min_p(fits, self.problem.spec.seed + stage)
-
-    def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
-        """Count a profile: its problem's simulations, and those of worker processes."""
-        self.made[id(problem)] = problem
-        if self.opts.workers != 1:
-            self.extra += spent_elsewhere
-
-    def cost(self) -> Cost:
-        return Cost(self.spent(), time.perf_counter() - self.t0)
-
-
-def _tie_intervals(run: _Run, tie: CandidateFit) -> dict[str, object]:
-    """Profile-likelihood intervals of an equally good candidate's added parameters."""
-    tie_fit = _fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
-    prof = profile_problem(
-        tie.problem,
-        tie_fit,
-        only=list(tie.candidate.names),
-        workers=run.opts.workers,
-        options=run.opts.walk,
-        confidence=run.opts.ci_confidence,
-    )
-    run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
-    estimates = _added_estimates(prof, tie.candidate.parameters, run.opts.ci_confidence)
-    return {name: e.to_dict() for name, e in estimates.items()}
-
-
 def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestResult]:
     """Residual tests of an augmented fit and the generic error-model test on top of it."""
     tests = locate.residual_tests(problem, fit)
@@ -200,32 +118,33 @@ def _tests_after(problem: Problem, fit: FitResult, seed: int) -> list[rt.TestRes
     return [*tests, generic] if generic else tests
 
 
-def _recheck_base(run: _Run, fit: FitResult, best: CandidateFit) -> FitResult | None:
-    """Re-fit the base model from the best candidate's base parameters; a lower chi2 wins."""
-    names = run.problem.names
-    start = run.problem.to_z({n: best.problem.from_z(best.z)[n] for n in names})
-    z, chi2, _ = refine(run.problem, start, options=run.opts.fit)
-    if chi2 < fit.chi2 - 1e-6 * max(1.0, fit.chi2):
-        log.info("base fit improved from %.6g to %.6g by a candidate's start", fit.chi2, chi2)
-        return _fit_of(run.problem, z, chi2, time.perf_counter())
-    return None
+def _correction(
+    problem: Problem, values: dict[str, float], generic: rt.TestResult | None, pole: Any
+) -> dict[str, Any]:
+    """Return the generic ARX correction of a fit's residuals and the input-driven model."""
+    correction = arx_correction(locate.residual_series(problem, values))
+    if generic is not None and pole is not None:
+        correction["input_error_model"] = {
+            "model": describe(pole), "pole_hz": pole.pole_hz,
+            "chi2_drop": generic.statistic, "df": generic.df, "p_value": generic.p_value,
+        }  # fmt: skip
+    return correction
 
 
-def _scan_base(
-    run: _Run, fit: FitResult, cands: list[Candidate]
-) -> tuple[FitResult, Scanner, list[CandidateFit], list[float]]:
-    """Scan the catalogue on the base fit (once more if a candidate revealed a better base)."""
-    for _ in range(2):
-        scanner = Scanner(run.problem, fit.z_estimate(), fit.jacobian)
-        fits, adjusted = run.scan_round(scanner, cands, 1)
-        best = fits[0]
-        if not best.fitted or best.p_value >= run.opts.screen_level:
-            break
-        better = _recheck_base(run, fit, best)
-        if better is None:
-            break
-        fit = better
-    return fit, scanner, fits, adjusted
+def _steps(
+    steps: Sequence[Step], estimates: dict[str, AddedEstimate], coupling: float | None
+) -> tuple[EffectStep, ...]:
+    out = []
+    for k, s in enumerate(steps):
+        e = s.effect
+        values = {n: estimates[n].estimate for n in e.names}
+        fine = e.side in ("feedback", "input") or e.effect == "output_lag"
+        out.append(EffectStep(
+            e.effect, e.label, e.sentence(values), {n: estimates[n] for n in e.names},
+            s.chi2_before, s.fit.chi2, s.fit.p_value, s.p_adjusted,
+            coupling if fine and k == len(steps) - 1 else None,
+        ))  # fmt: skip
+    return tuple(out)
 
 
 def diagnose_problem(
@@ -234,6 +153,7 @@ def diagnose_problem(
     fit: FitResult | None = None,
     options: DiagnoseOptions = DiagnoseOptions(),
     progress: ProgressCallback | None = None,
+    test_data: Sequence[Experiment] = (),
 ) -> Diagnosis:
     """Diagnose the model mismatch of an estimation problem (see the module docstring).
 
@@ -247,6 +167,9 @@ def diagnose_problem(
         Levels and effort.
     progress
         Receives ``Progress("diagnose", done, total, detail)`` after every stage.
+    test_data
+        Held-out experiments: the base and every augmented model are simulated on them from
+        their fitted parameters (``validation`` in the result).
 
     Returns
     -------
@@ -254,13 +177,13 @@ def diagnose_problem(
 
     """
     opts = options
-    run = _Run(problem, opts, progress)
+    run = Run(problem, opts, progress)
     if fit is None:
         fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)
-    cands = study_catalogue(problem)
-    run.total = 2 * len(cands) + 4
+    cands = study_catalogue(problem, fit.estimates)
+    run.total = 3 * len(cands) + 5
     # 1-2. locate and scan
-    fit, scanner, fits, adjusted = _scan_base(run, fit, cands)
+    fit, scanner, fits, adjusted = scan_base(run, fit, cands)
     tests_before = locate.residual_tests(problem, fit)
     agreement = locate.experiments_disagree(problem, fit, opts.agreement_nfev)
     model = local_model(problem, scanner.z, scanner.jac)
@@ -274,8 +197,10 @@ def diagnose_problem(
     # 3. decide
     evidence = decide.weighted_holm(decide.family_weights(family), opts.alpha)
     where, found = locate.location(problem, fit, [t for t in evidence if t.output])
+    base_series = fit_series(problem, fit.estimates)
+    where["levels"] = level_location(base_series, opts.alpha)
     bic_before = fit.chi2 + problem.n_free * float(np.log(fit.n_data))
-    scores = [_score(f, a) for f, a in zip(fits, adjusted)]
+    base_model = [(problem, dict(fit.estimates))]
     common: dict[str, Any] = {
         "false_alarm": opts.alpha, "tests_before": tuple(family), "location": where,
         "windows": tuple(found), "evidence": tuple(evidence), "chi2_before": fit.chi2,
@@ -289,62 +214,41 @@ def diagnose_problem(
         return Diagnosis(
             mismatch=False, tests_after=tuple(tests_before), effect=None,
             description=explain.no_mismatch(opts.alpha, scan_test.p_value),
-            candidates=tuple(scores), added_parameters={}, chi2_after=fit.chi2,
-            lrt_p_value=None, bic_after=bic_before, parameters_after=dict(fit.estimates),
+            candidates=tuple(score(f, a) for f, a in zip(fits, adjusted)), added_parameters={},
+            chi2_after=fit.chi2, lrt_p_value=None, bic_after=bic_before,
+            parameters_after=dict(fit.estimates),
+            validation=tuple(validation(base_model, test_data)),
             cost=run.cost(), **common,
         )  # fmt: skip
-    # 4. refine: the best significant candidate, then a second one if residuals still fail
-    best = fits[0]
-    significant = adjusted[0] <= opts.alpha
-    if not best.fitted:
-        best = scanner.fit(best, opts.fit)
-    aug, z = best.problem, best.z
-    final_fit = _fit_of(aug, z, best.chi2, run.t0)
+    # 4. add effects while a round's best candidate is significant
     seed_after = problem.spec.seed + 1
-    tests_after = _tests_after(aug, final_fit, seed_after)
-    applied = [best.candidate]
-    second: str | None = None
-    if significant and rt.holm(tests_after, opts.alpha):
-        pool = [c for c in cands if c is not best.candidate]
-        on_top = Scanner(aug, z, final_fit.jacobian)
-        fits2, adjusted2 = run.scan_round(on_top, pool, 2)
-        scores += [_score(f, a) for f, a in zip(fits2, adjusted2)]
-        top = fits2[0] if fits2[0].fitted else on_top.fit(fits2[0], opts.fit)
-        if adjusted2[0] <= opts.alpha:
-            alone = next(f for f in fits if f.candidate is top.candidate)
-            alone = alone if alone.fitted else scanner.fit(alone, opts.fit)
-            drop = max(alone.chi2 - top.chi2, 0.0)
-            if stats.chi2.sf(drop, len(best.candidate.names)) >= opts.alpha:
-                best, applied, aug, z = alone, [top.candidate], alone.problem, alone.z
-                final_fit = _fit_of(aug, z, alone.chi2, run.t0)
-            else:
-                applied, aug, z, second = (
-                    [best.candidate, top.candidate],
-                    top.problem,
-                    top.z,
-                    (top.candidate.effect),
-                )
-                final_fit = _fit_of(aug, z, top.chi2, run.t0)
-            tests_after = _tests_after(aug, final_fit, seed_after)
-    run.report("tests of the augmented model")
-    explained = significant and not rt.holm(tests_after, opts.alpha)
-    if not explained:
-        correction = arx_correction(locate.residual_series(problem, fit.estimates))
-        if generic is not None and pole is not None:
-            correction["input_error_model"] = {
-                "model": describe(pole), "pole_hz": pole.pole_hz,
-                "chi2_drop": generic.statistic, "df": generic.df, "p_value": generic.p_value,
-            }  # fmt: skip
+
+    def misfit_left(f: CandidateFit) -> bool:
+        fitted = fit_of(f.problem, f.z, f.chi2, run.t0)
+        return bool(rt.holm(_tests_after(f.problem, fitted, seed_after), opts.alpha))
+
+    steps, scored = forward(
+        scanner, (fits, adjusted), cands, run.scan_round, opts.alpha, opts.fit, misfit_left
+    )
+    scores = [score(f, a) for f, a in scored]
+    if not steps:
+        correction = _correction(problem, fit.estimates, generic, pole)
         run.report("generic correction")
-        worst = min(tests_after, key=lambda t: t.p_value) if tests_after else None
+        worst = min(tests_before, key=lambda t: t.p_value) if tests_before else None
         return Diagnosis(
-            mismatch=True, tests_after=tuple(tests_after), effect="unexplained",
+            mismatch=True, tests_after=tuple(tests_before), effect="unexplained",
             description=explain.unexplained(scores[0], worst, correction, where),
             candidates=tuple(scores), added_parameters={}, chi2_after=fit.chi2,
             lrt_p_value=scores[0].p_value, bic_after=bic_before,
             parameters_after=dict(fit.estimates), generic_correction=correction,
-            cost=run.cost(), **common,
+            validation=tuple(validation(base_model, test_data)), cost=run.cost(), **common,
         )  # fmt: skip
+    best = steps[0].fit
+    applied = [s.effect for s in steps]
+    aug, z = steps[-1].fit.problem, steps[-1].fit.z
+    final_fit = fit_of(aug, z, steps[-1].fit.chi2, run.t0)
+    tests_after = _tests_after(aug, final_fit, seed_after)
+    run.report("tests of the augmented model")
     # 5. profile the added parameters, then the original ones before and after
     added = [p for c in applied for p in c.parameters]
     prof = profile_problem(
@@ -353,7 +257,7 @@ def diagnose_problem(
     )  # fmt: skip
     run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
-    estimates = _added_estimates(prof, added, opts.ci_confidence)
+    estimates = added_estimates(prof, added, opts.ci_confidence)
     run.report("profiles of the added parameters")
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:
@@ -361,13 +265,16 @@ def diagnose_problem(
         absorbed_by, sims = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
         run.profiled(at_study, sims)
         run.report("profiles of the original parameters before and after")
-    common["location"] = locate.effect_location(
-        locate.residual_series(problem, fit.estimates),
-        locate.residual_series(aug, final_fit.estimates),
-    )
+    common["location"] = {
+        **locate.effect_location(
+            locate.residual_series(problem, fit.estimates),
+            locate.residual_series(aug, final_fit.estimates),
+        ),
+        "levels": where["levels"],
+    }
     rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
     ties = decide.ties(best, rivals) if len(applied) == 1 else []
-    tied = [{**t.to_dict(), "intervals": _tie_intervals(run, t.fit)} for t in ties]
+    tied = [{**t.to_dict(), "intervals": tie_intervals(run, t.fit)} for t in ties]
     tests = settling_tests(problem, best, ties) if opts.discriminate else []
     for entry, test in zip(tied, tests):
         entry["expected_separation"] = round(test.expected_chi2, 4)
@@ -377,17 +284,26 @@ def diagnose_problem(
     proposal = max(filter(settles, tests), key=lambda d: d.expected_chi2, default=None)
     if tests:
         run.report("tests that would settle the ties")
+    coupling = coupling_error(aug, final_fit.estimates)
+    models = [*base_model, *((s.fit.problem, s.fit.problem.from_z(s.fit.z)) for s in steps[:-1])]
+    checked = validation([*models, (aug, dict(final_fit.estimates))], test_data)
+    run.report("coupling check and held-out validation")
     lrt = float(stats.chi2.sf(max(fit.chi2 - final_fit.chi2, 0.0), len(added)))
     concealed = not rt.holm(tests_before, opts.alpha)
+    residuals_pass = not rt.holm(tests_after, opts.alpha)
+    effect_steps = _steps(steps, estimates, coupling)
+    leftover = None if residuals_pass else _correction(aug, final_fit.estimates, None, None)
     return Diagnosis(
         mismatch=True, tests_after=tuple(tests_after), effect=best.candidate.effect,
         description=explain.explained(
-            applied, estimates, fit.chi2, final_fit.chi2, lrt, ties, concealed, rival
-        ) + explain.settle(tests),
+            effect_steps, fit.chi2, final_fit.chi2, lrt, ties, concealed, rival, residuals_pass,
+        ) + explain.settle(tests) + explain.held_out(checked) + explain.levels(where["levels"]),
         candidates=tuple(scores), added_parameters=estimates, chi2_after=final_fit.chi2,
         lrt_p_value=lrt, bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
-        parameters_after=dict(final_fit.estimates), second_effect=second,
+        parameters_after=dict(final_fit.estimates),
+        second_effect=applied[1].effect if len(applied) > 1 else None,
         indistinguishable=(*tied, *([rival] if rival else [])), absorbed=absorbed_by,
         discriminating_experiment=proposal.to_dict() if proposal else None,
+        generic_correction=leftover, effects=effect_steps, validation=tuple(checked),
         cost=run.cost(), **common,
     )  # fmt: skip

@@ -7,10 +7,9 @@ from typing import Any
 
 from scipy import stats
 
-from fmuid.discrepancy.catalogue import Candidate
 from fmuid.discrepancy.decide import Tie, strength
 from fmuid.discrepancy.residual_tests import TestResult
-from fmuid.discrepancy.result import AddedEstimate
+from fmuid.discrepancy.result import AddedEstimate, EffectStep
 from fmuid.discrepancy.settle import settles
 from fmuid.experiment_design.discriminate import Discrimination
 
@@ -33,26 +32,40 @@ def no_mismatch(alpha: float, scan_p: float | None) -> str:
 
 
 def explained(
-    applied: Sequence[Candidate],
-    estimates: dict[str, AddedEstimate],
+    steps: Sequence[EffectStep],
     chi2_before: float,
     chi2_after: float,
     lrt: float,
     ties: Sequence[Tie],
     concealed: bool,
     rival: Mapping[str, Any] | None = None,
+    residuals_pass: bool = True,
 ) -> str:
-    """Verdict and summary of a named effect (``rival``: the generic error model as a tie)."""
+    """Verdict and summary of the named effects, step by step.
+
+    ``rival``: the generic error model as a tie; ``residuals_pass``: whether the final model's
+    residuals pass every test (else the remaining misfit is said to be there).
+    """
     parts = []
-    for c in applied:
-        e = estimates[c.parameters[0].name]
-        text = c.description.format(value=f"{e.estimate:.3g}")
-        parts.append(f"{c.effect}: {text} ({c.parameters[0].name} {_fmt_ci(e)})")
-    out = "; then ".join(parts)
+    for k, step in enumerate(steps):
+        first = step.parameters[next(iter(step.parameters))]
+        name = next(iter(step.parameters))
+        drop = step.chi2_before - step.chi2_after
+        lead = "" if len(steps) == 1 else f"step {k + 1}, "
+        parts.append(
+            f"{lead}{step.effect}: {step.description} ({name} {_fmt_ci(first)}; chi2 drop "
+            f"{drop:.4g}, p = {step.p_value:.2g})"
+        )
+    out = "; ".join(parts)
     out = out[0].upper() + out[1:]
-    out += (
-        f". Chi2 {chi2_before:.4g} -> {chi2_after:.4g}: {strength(lrt)} from the likelihood-ratio "
-        "test; the augmented model's residuals pass every test."
+    tail = (
+        "the augmented model's residuals pass every test"
+        if residuals_pass
+        else "the augmented model's residuals still fail a test: part of the misfit is left "
+        "(see generic_correction)"
+    )
+    out += f". Chi2 {chi2_before:.4g} -> {chi2_after:.4g}: {strength(lrt)} from the " + (
+        f"likelihood-ratio test; {tail}."
     )
     if concealed:
         out += (
@@ -69,6 +82,23 @@ def explained(
             "for physics that the catalogue lacks."
         )
     return out
+
+
+def held_out(entries: Sequence[Mapping[str, Any]]) -> str:
+    """Sentence on the held-out data: RMS simulation error before and after."""
+    parts = [
+        f"{e['output']} in {e['experiment']} {e['rms_base']:.3g} -> {e['rms_final']:.3g}"
+        for e in entries
+    ]
+    if not parts:
+        return ""
+    return f" Held-out data, RMS simulation error (output units): {'; '.join(parts)}."
+
+
+def levels(found: Mapping[str, Any]) -> str:
+    """Sentence on where in the outputs' range the base fit's misfit sat."""
+    words = [v["words"] for v in found.values() if v.get("words")]
+    return f" Before the augmentation, {'; '.join(words)}." if words else ""
 
 
 def _tie(t: Tie, ties: Sequence[Tie]) -> str:

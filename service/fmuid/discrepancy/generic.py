@@ -34,7 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, signal, stats
+from scipy import linalg, optimize, signal, stats
 
 from fmuid.discrepancy.decide import generic_tie, min_p
 from fmuid.discrepancy.residual_tests import TestResult
@@ -82,14 +82,42 @@ def poles_hz(problem: Problem) -> np.ndarray:
     return low * OCTAVE ** np.arange(n)
 
 
+def filtered(num: np.ndarray, den: np.ndarray, u: np.ndarray, time: np.ndarray) -> np.ndarray:
+    """Response of ``num/den`` from rest to ``u``, linear between samples, on any time grid.
+
+    Equal steps go to :func:`scipy.signal.lsim`; otherwise the exact first-order-hold
+    recursion is stepped with one matrix exponential per distinct step (a repeated time, a
+    step in the input given as two rows, keeps the state).
+    """
+    h = np.diff(time)
+    if h.size == 0 or np.allclose(h, h[0], rtol=1e-9, atol=0.0):
+        return np.asarray(signal.lsim((num, den), u, time)[1], dtype=float)
+    a, b, c, d = signal.tf2ss(num, den)
+    n = a.shape[0]
+    m = np.zeros((n + 2, n + 2))
+    m[:n, :n], m[:n, n], m[n, n + 1] = a, b[:, 0], 1.0
+    x = np.zeros(n)
+    y = np.empty(len(u))
+    y[0] = float(c[0] @ x + d[0, 0] * u[0])
+    steps: dict[float, np.ndarray] = {}
+    for k, step in enumerate(h.tolist()):
+        if step > 0:
+            e = steps.get(step)
+            if e is None:
+                e = steps.setdefault(step, linalg.expm(m * step))
+            slope = (u[k + 1] - u[k]) / step
+            x = e[:n, :n] @ x + e[:n, n] * u[k] + e[:n, n + 1] * slope
+        y[k + 1] = float(c[0] @ x + d[0, 0] * u[k + 1])
+    return y
+
+
 def laguerre(pole_hz: float, time: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Return the first :data:`ORDER` Laguerre filters of ``u`` (linear between samples)."""
     p = 2.0 * np.pi * pole_hz
     num, den = np.array([np.sqrt(2.0 * p)]), np.array([1.0, p])
     out = []
     for _ in range(ORDER):
-        _, y, _ = signal.lsim((num, den), u, time)
-        out.append(y)
+        out.append(filtered(num, den, u, time))
         num, den = np.polymul(num, [-1.0, p]), np.polymul(den, [1.0, p])
     return np.column_stack(out)
 

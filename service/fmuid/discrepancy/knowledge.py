@@ -46,6 +46,11 @@ class AddedParameter:
     off_side
         ``"inside"`` the bounds, ``"low"`` (below the lower bound, e.g. a time constant of 0 on
         a log scale) or ``"high"`` (the effect vanishes as the value grows).
+    probe
+        The screen's smallest effect (default: the bound next to off, or a step from off).
+    grid
+        Values the screen tries (default: spread over the bounds); a threshold's levels inside
+        the range the signals reach, where it has an effect.
 
     """
 
@@ -55,6 +60,8 @@ class AddedParameter:
     spec: ParameterSpec
     off: float
     off_side: str
+    probe: float | None = None
+    grid: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -123,6 +123,50 @@ class AddedEstimate:
 
 
 @dataclass(frozen=True)
+class EffectStep:
+    """One effect added by the forward selection, with what it bought.
+
+    Attributes
+    ----------
+    effect, label
+        The effect's name and its label with the parameter names.
+    description
+        Its sentence in physical words at the fitted values.
+    parameters
+        Estimates and intervals of its added parameters (from the final model's profiles).
+    chi2_before, chi2_after
+        Chi2 of the model before and after this step.
+    p_value, p_adjusted
+        Likelihood-ratio p-value of the step, and adjusted for its round's scan.
+    coupling_error
+        For effects on a fine grid (feedback, lags, clipping): the largest change of the final
+        fit's predictions, in sigmas, when that grid's step is halved; None otherwise.
+
+    """
+
+    effect: str
+    label: str
+    description: str
+    parameters: dict[str, AddedEstimate]
+    chi2_before: float
+    chi2_after: float
+    p_value: float
+    p_adjusted: float
+    coupling_error: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form."""
+        return {
+            "effect": self.effect, "label": self.label, "description": self.description,
+            "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
+            "chi2_before": float(self.chi2_before), "chi2_after": float(self.chi2_after),
+            "chi2_drop": float(self.chi2_before - self.chi2_after),
+            "p_value": float(self.p_value), "p_adjusted": float(self.p_adjusted),
+            "coupling_error": self.coupling_error,
+        }  # fmt: skip
+
+
+@dataclass(frozen=True)
 class Diagnosis:
     """Outcome of ``fmuid.diagnose``: is there a mismatch, where, what explains it.
 
@@ -157,6 +201,8 @@ class Diagnosis:
     cost: Cost = Cost(0, 0.0)
     units: dict[str, str] = field(default_factory=dict)
     discriminating_experiment: dict[str, Any] | None = None
+    effects: tuple[EffectStep, ...] = ()
+    validation: tuple[dict[str, Any], ...] = ()
 
     def whiteness(self, after: bool) -> dict[str, float]:
         """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""
@@ -205,6 +251,8 @@ class Diagnosis:
             "cost": self.cost.to_dict(),
             "units": dict(self.units),
             "discriminating_experiment": self.discriminating_experiment,
+            "effects": [e.to_dict() for e in self.effects],
+            "validation": list(self.validation),
         }
         return {"verdict": verdict(out), **out}
 
@@ -238,32 +286,55 @@ class Diagnosis:
         return parameter_frame(rows)
 
 
+def _validation_clause(d: dict[str, Any]) -> str:
+    """``; held-out RMS error of x 7.1e-03 -> 9.8e-04 (test.csv)`` for the named model."""
+    parts = []
+    for v in d.get("validation") or []:
+        if v.get("rms_by_step"):
+            parts.append(
+                f"{v['output']} {v['rms_base']:.3g} -> {v['rms_final']:.3g} ({v['experiment']})"
+            )
+    return f"; held-out RMS simulation error {', '.join(parts)}" if parts else ""
+
+
 def verdict(d: dict[str, Any]) -> str:
-    """One sentence from a diagnosis' JSON: mismatch or not, what explains it, how strongly."""
+    """One sentence from a diagnosis' JSON: mismatch or not, what explains it, how strongly.
+
+    Effect names of earlier versions read as today's (``sensor_lag`` as ``output_lag``).
+    """
+    from fmuid.discrepancy.effects import effect_of
+
     level = d.get("false_alarm", 0.01)
     if not d.get("mismatch"):
         return f"No mismatch: no test rejects the model at a family-wise level of {level:g}."
     effect = d.get("effect")
+    evidence = d.get("evidence") or []
+    hidden = bool(evidence) and all(
+        e.get("test") in ("generic_error_model", "catalogue_scan", "experiments_disagree")
+        for e in evidence
+    )
     if effect in (None, "unexplained"):
         outputs = ", ".join((d.get("location") or {}).get("outputs") or []) or "the outputs"
-        hidden = all(
-            e.get("test") in ("generic_error_model", "catalogue_scan", "experiments_disagree")
-            for e in d.get("evidence") or []
-        )
         note = ", although the base model's residuals look like noise" if hidden else ""
         return f"A mismatch in {outputs} that no catalogue entry explains{note}."
+    ties = [t["effect"] if isinstance(t, dict) else str(t) for t in d.get("indistinguishable", [])]
+    named = [effect_of(e["effect"]) for e in d.get("effects") or []] or [effect_of(effect)]
     p = d.get("lrt_p_value")
     words = "evidence" if p is None else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else
                                           "moderate") + f" evidence (p = {p:.2g})"  # fmt: skip
-    evidence = d.get("evidence") or []
-    hidden = bool(evidence) and all(
-        e.get("test") in ("catalogue_scan", "generic_error_model", "experiments_disagree")
-        for e in evidence
-    )
-    out = f"{effect} explains the mismatch, with {words}"
+    what = ", then ".join(named)
+    verb = "explains" if len(named) == 1 else "explain"
+    if "unexplained" in ties:
+        out = (
+            f"Physics outside the catalogue explains the mismatch as well as {what}, which "
+            f"{verb} it with {words}"
+        )
+        ties = [t for t in ties if t != "unexplained"]
+    else:
+        out = f"{what} {verb} the mismatch, with {words}"
     if hidden:
         out += ", although the base model's residuals look like noise"
-    ties = [t["effect"] if isinstance(t, dict) else str(t) for t in d.get("indistinguishable", [])]
     if ties:
-        out += f"; {', '.join(ties)} explain{'s' if len(ties) == 1 else ''} it equally well"
-    return out + "."
+        out += f"; {', '.join(effect_of(t) for t in ties)} explain{'s' if len(ties) == 1 else ''}"
+        out += " it equally well"
+    return out + _validation_clause(d) + "."

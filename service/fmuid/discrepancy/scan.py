@@ -30,13 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from fmuid.discrepancy.catalogue import Candidate
+from fmuid.discrepancy.augment import AugmentedPredictor
+from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine, safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
-from fmuid.estimation.wrappers import AugmentedPredictor
 
 log = logging.getLogger(__name__)
 
@@ -80,7 +80,7 @@ class CandidateFit:
 
     """
 
-    candidate: Candidate
+    candidate: Effect
     problem: Problem
     z: np.ndarray
     chi2: float
@@ -117,22 +117,20 @@ def sensitivity_basis(jacobian: np.ndarray) -> np.ndarray:
     return u[:, s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
 
 
-def augmented(root: Problem, candidates: Sequence[Candidate]) -> Problem:
-    """Return the root problem with the candidates' parameters added and wrappers applied."""
+def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
+    """Return the root problem with the effects' parameters added and the effects applied."""
     params = dict(root.parameter_specs)
-    wrappers: dict[str, tuple[str, str | None]] = {}
     for c in candidates:
         for p in c.parameters:
             params[p.name] = p.spec
-            if c.wrapper is not None:
-                wrappers[p.name] = c.wrapper
     base = root.predictor
+    effects = tuple(candidates)
     if isinstance(base, AugmentedPredictor):
-        wrappers = {**base.wrappers, **wrappers}
+        effects = (*base.effects, *effects)
         base = base.base
-    predictor = AugmentedPredictor(base, wrappers) if wrappers and isinstance(
-        base, FmuPredictor
-    ) else base  # fmt: skip
+    predictor = (
+        AugmentedPredictor(base, effects) if effects and isinstance(base, FmuPredictor) else base
+    )
     return Problem(
         root.fmu_path, root.experiments, root.spec, predictor=predictor, parameters=params,
         sigma=root.sigma, sigma_method=root.sigma_method, model=root.model,
@@ -140,7 +138,9 @@ def augmented(root: Problem, candidates: Sequence[Candidate]) -> Problem:
 
 
 def _probe(p: AddedParameter) -> float:
-    """Return the smallest effect of a parameter: the bound next to off, or a small step."""
+    """Return the smallest effect of a parameter: its probe, the bound next to off, or a step."""
+    if p.probe is not None:
+        return p.probe
     if p.off_side == "low":
         return p.spec.lower
     if p.off_side == "high":
@@ -150,7 +150,12 @@ def _probe(p: AddedParameter) -> float:
 
 
 def _from_step(p: AddedParameter, probe: float, theta: float) -> float | None:
-    """Parameter value of ``theta`` probe-sized effects (``None`` when it cannot be reached)."""
+    """Parameter value of ``theta`` probe-sized effects (``None`` when it cannot be reached).
+
+    A threshold (a parameter with its own grid) is not linear in its effect: its grid decides.
+    """
+    if p.grid and p.off_side != "inside":
+        return None
     if p.off_side == "high":  # the effect grows like 1 / value^2 (a saturation angle)
         return probe / np.sqrt(theta) if theta > 0 else None
     if p.off_side == "low" and theta <= 0:
@@ -160,6 +165,8 @@ def _from_step(p: AddedParameter, probe: float, theta: float) -> float | None:
 
 
 def _grid(p: AddedParameter) -> np.ndarray:
+    if p.grid:
+        return np.asarray(p.grid, dtype=float)
     lo, hi = p.spec.lower, p.spec.upper
     if p.spec.resolved_scale == "log":
         return np.logspace(np.log10(lo), np.log10(hi), GRID_POINTS)
@@ -196,7 +203,7 @@ class Scanner:
     def _residuals_at(self, aug: Problem, added: dict[str, float]) -> np.ndarray:
         return safe_residuals(aug, aug.to_z({**self.values, **added}))
 
-    def screen(self, candidate: Candidate, stage: int = 1) -> CandidateFit:
+    def screen(self, candidate: Effect, stage: int = 1) -> CandidateFit:
         """Linearised screen of one candidate (see the module docstring)."""
         aug = augmented(self.problem, [candidate])
         params = candidate.parameters
@@ -268,7 +275,7 @@ class Scanner:
 
 def scan(
     scanner: Scanner,
-    candidates: Sequence[Candidate],
+    candidates: Sequence[Effect],
     *,
     screen_level: float,
     min_fits: int,

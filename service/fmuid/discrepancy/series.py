@@ -52,7 +52,7 @@ def augmented_problem_of(problem: Problem, diagnosis: Diagnosis) -> Problem:
     """
     if not diagnosis.added_parameters:
         return problem
-    cands = study_catalogue(problem)
+    cands = study_catalogue(problem, diagnosis.parameters_before)
     added = set(diagnosis.added_parameters)
     chosen = [c for c in cands if set(c.names) <= added]
     return augmented(problem, chosen)

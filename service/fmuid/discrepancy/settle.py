@@ -2,7 +2,7 @@
 
 When the data cannot tell two candidates apart, each fitted candidate becomes a hypothesis of
 :mod:`fmuid.experiment_design.discriminate` (its augmented parameters, its fitted values, its
-wrappers) and the tests of :func:`fmuid.experiment_design.discriminate.default_space` (steps, chirps
+effects) and the tests of :func:`fmuid.experiment_design.discriminate.default_space` (steps, chirps
 and multisines like the study's data: its input amplitude, longest record, rate and noise) are
 searched for the one whose expected likelihood-ratio statistic between the two is largest.
 """
@@ -13,10 +13,10 @@ from collections.abc import Sequence
 
 from scipy import stats
 
+from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.discrepancy.decide import Tie
 from fmuid.discrepancy.scan import CandidateFit
 from fmuid.estimation.problem import Problem
-from fmuid.estimation.wrappers import AugmentedPredictor
 from fmuid.experiment_design.discriminate import (
     Discrimination,
     Hypothesis,
@@ -43,18 +43,18 @@ ties) stays a fraction of the diagnosis."""
 
 
 def hypothesis(fit: CandidateFit, name: str | None = None) -> Hypothesis:
-    """Return a fitted candidate as a hypothesis: its parameters, fitted values and wrappers.
+    """Return a fitted candidate as a hypothesis: its parameters, fitted values and effects.
 
     ``name`` defaults to the candidate's effect.
     """
     problem = fit.problem
     predictor = problem.predictor
-    wrappers = predictor.wrappers if isinstance(predictor, AugmentedPredictor) else {}
+    effects = predictor.effects if isinstance(predictor, AugmentedPredictor) else ()
     return Hypothesis(
         name=name or fit.candidate.effect,
         parameters=dict(problem.parameter_specs),
         values=problem.from_z(fit.z),
-        wrappers=dict(wrappers),
+        effects=tuple(effects),
     )
 
 

@@ -20,10 +20,11 @@ import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
 from fmuid.data import ParameterSpec, Spec
+from fmuid.discrepancy.augment import AugmentedPredictor
+from fmuid.discrepancy.effects import Effect
 from fmuid.estimation.optimize import fit_problem, jacobian
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
-from fmuid.estimation.wrappers import AugmentedPredictor
 from fmuid.experiment_design.fisher import trial_spec
 from fmuid.experiment_design.signals import (
     Trial,
@@ -48,15 +49,14 @@ class Hypothesis:
     Attributes
     ----------
     name
-        Label, e.g. ``"sensor_lag"``.
+        Label, e.g. ``"output_lag"``.
     parameters
         Free parameters of this hypothesis (the study's plus any added ones).
     values
         Parameter values under which it predicts (e.g. its fit to the data).
-    wrappers
-        Generic effects around the FMU, as :class:`fmuid.estimation.wrappers.AugmentedPredictor`
-        takes them: ``{parameter: (kind, input or output)}``, e.g.
-        ``{"tau_sensor": ("sensor_lag", None)}``.
+    effects
+        Effects around the FMU (:mod:`fmuid.discrepancy.effects`), applied by
+        :class:`fmuid.discrepancy.augment.AugmentedPredictor`.
     fixed
         FMU parameter values of this hypothesis (switchable physics).
     fmu
@@ -67,7 +67,7 @@ class Hypothesis:
     name: str
     parameters: Mapping[str, ParameterSpec]
     values: Mapping[str, float]
-    wrappers: Mapping[str, tuple[str, str | None]] = field(default_factory=dict)
+    effects: tuple[Effect, ...] = ()
     fixed: Mapping[str, float] = field(default_factory=dict)
     fmu: str | Path | None = None
 
@@ -89,7 +89,7 @@ class Hypothesis:
         )
         model = _model(path)
         base = FmuPredictor(model, tspec.fixed, [space.input])
-        predictor = AugmentedPredictor(base, dict(self.wrappers)) if self.wrappers else base
+        predictor = AugmentedPredictor(base, self.effects) if self.effects else base
         exp = trial_experiment(trial, space.input, values)
         return Problem(path, [exp], tspec, predictor=predictor, model=model)
 

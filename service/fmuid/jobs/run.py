@@ -168,8 +168,7 @@ def run_engine(
             return fmuid.profile(
                 fmu, experiments, spec, progress=progress, executor=executor, test_data=tests
             )
-    held_out = {"test_data": tests} if tests else {}
-    return fmuid.diagnose(fmu, experiments, spec, progress=progress, **held_out)
+    return fmuid.diagnose(fmu, experiments, spec, progress=progress, test_data=tests)
 
 
 def run_job(

@@ -9,7 +9,7 @@ from fmuid.model.fmu import FmuModel
 
 INPUT_STEP = 1e-3
 """Default longest sub-step [s] over which a co-simulation FMU without input derivatives holds
-an input (the linear input is sampled at each sub-step's start)."""
+an input (the linear input's value at each sub-step's midpoint)."""
 
 
 def as_model(fmu: FmuModel | str | Path, interface: str | None = None) -> FmuModel:
@@ -52,4 +52,7 @@ class SimulatorBase:
             return f"model exchange: linear inputs set at every CVode evaluation (rtol {RTOL:g})"
         if model.can_interpolate_inputs:
             return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
-        return f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s"
+        return (
+            f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s "
+            "at each sub-step's midpoint value"
+        )

@@ -6,8 +6,15 @@ The comments naming FMI functions on the lines that call into the FMU are read b
 At each communication point the inputs for that time are set before the outputs are read, so a
 direct-feedthrough output sees the input of the same instant. Between points the inputs are
 linear: FMUs that accept input derivatives (FMI 2.0 ``canInterpolateInputs``) get the slope of
-each interval; the others get the linear input sampled every ``input_step`` seconds and held
-over each sub-step (only on intervals where some input changes).
+each interval; the others cross each interval where some input changes in equal sub-steps of
+at most ``input_step`` seconds, each holding the linear input's value at the sub-step's
+midpoint. The midpoint value makes the held input's integral over every sub-step exact, so the
+states' error is second order in the sub-step ``d`` (a local error of about ``d**3 / 12``
+times the input's slope and the system's rate) where the start value gave a first-order lag of
+half a sub-step. At the communication points the FMU sees the exact input values.
+
+The loop runs in compiled code (:mod:`fmuid.model.native`) where it can (Real/Float64 inputs
+and outputs, gcc at hand); the Python loop here is the reference it is tested against.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ import numpy as np
 
 from fmuid.model.channels import Channels
 from fmuid.model.instance import Instance
+from fmuid.model.native import run_native_cosimulation
 from fmuid.model.plan import RunPlan
 
 
@@ -27,6 +35,7 @@ def run_cosimulation(
     inputs: Channels,
     outputs: Channels,
     input_step: float | None,
+    native: bool = True,
 ) -> tuple[np.ndarray, float | None]:
     """Step an initialized FMU over the grid and read the outputs.
 
@@ -42,6 +51,8 @@ def run_cosimulation(
     input_step
         Longest sub-step [s] over which a non-interpolating FMU holds an input; None when the
         FMU gets input derivatives instead.
+    native
+        Run the compiled loop where it can run (False: always the Python loop).
 
     Returns
     -------
@@ -50,6 +61,8 @@ def run_cosimulation(
         asked to stop at, or None when it ran to the end.
 
     """
+    if native and (done := run_native_cosimulation(instance, plan, inputs, outputs, input_step)):
+        return done
     result = np.full((plan.n_rows, outputs.size), np.nan)
     times, rows_at = plan.times, plan.rows_at
     values, slopes = plan.value.tolist(), plan.slope.tolist()
@@ -77,7 +90,7 @@ def run_cosimulation(
         if k == last:
             break
         h = times[k + 1] - t
-        if not moving[k] or h <= sub_step:
+        if not moving[k]:
             status = step(t, h, 1)  # fmi2DoStep (fmi3DoStep)
             stopped = None if status <= 1 else instance.step_outcome(status, t)
         else:
@@ -102,17 +115,17 @@ def _sub_steps(
 ) -> float | None:
     """Cross ``[t, t + h]`` in equal sub-steps of at most ``input_step``.
 
-    Each sub-step holds the linear input's value at its start; returns the stop time if the FMU
-    asks to stop, else None.
+    Each sub-step holds the linear input's value at its midpoint; returns the stop time if the
+    FMU asks to stop, else None.
     """
     step = instance.stepper()
-    n = math.ceil(h / input_step - 1e-9)
+    n = max(1, math.ceil(h / input_step - 1e-9))
     for j in range(n):
         t_j = t + h * j / n
-        if j:
-            instance.set(
-                inputs, [v + s * (t_j - t) for v, s in zip(value, slope, strict=True)], t_j
-            )
+        t_mid = t + h * (j + 0.5) / n
+        instance.set(
+            inputs, [v + s * (t_mid - t) for v, s in zip(value, slope, strict=True)], t_mid
+        )
         status = step(t_j, t + h * (j + 1) / n - t_j, 1)  # fmi2DoStep (fmi3DoStep)
         if status > 1:
             return instance.step_outcome(status, t_j)

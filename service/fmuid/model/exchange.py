@@ -7,15 +7,24 @@ are linear in time and set at every time the solver evaluates the model (exact, 
 at an input breakpoint the solver restarts, and where an input jumps (or an integer/Boolean
 input changes) the FMU goes through event mode. Time, state and step events are handled as the
 FMI standard describes; a ``terminateSimulation`` request ends the run at its time.
+
+Nominals the FMU gives that are not positive and finite (Dymola's are 0) would make CVode's
+tolerances zero or negative; they are replaced by ``max(|x|, 1)`` of the state at that time,
+and the log says so once per instance. A failure of CVode becomes one :class:`FmuError` naming
+the FMU, the time span and SUNDIALS' message (SUNDIALS' own line on stderr is silenced).
 """
 
 from __future__ import annotations
 
 import ctypes
+import logging
 from typing import Any
 
 import numpy as np
 from fmpy.sundials import CVodeSolver
+from fmpy.sundials.libraries import sundials_core, sundials_cvode
+from fmpy.sundials.sundials_context import SUNContext_PushErrHandler
+from fmpy.sundials.sundials_types import SUNContext
 
 from fmuid.errors import FmuError
 from fmuid.model.channels import Channels
@@ -26,6 +35,13 @@ RTOL = 1e-8
 """Relative tolerance of CVode (and the tolerance announced to the FMU)."""
 MAX_STEPS = 100_000
 """Most internal CVode steps between two communication points."""
+
+logger = logging.getLogger(__name__)
+
+_clear_handlers = sundials_core.SUNContext_ClearErrHandlers
+_clear_handlers.argtypes = [SUNContext]
+_no_hnil_warnings = sundials_cvode.CVodeSetMaxHnilWarns
+_no_hnil_warnings.argtypes = [ctypes.c_void_p, ctypes.c_int]
 
 
 class _Model:
@@ -77,7 +93,23 @@ class _Model:
         self._check("GetEventIndicators", status)
 
     def get_nominals(self, x: Any, n: int) -> None:
-        self._check("GetNominals", self.fn["GetNominalsOfContinuousStates"](self.c, x, n))
+        status = self.fn["GetNominalsOfContinuousStates"](self.c, x, n)
+        self._check("GetNominalsOfContinuousStates", status)
+        nominal = np.ctypeslib.as_array(x, (n,))
+        bad = ~(np.isfinite(nominal) & (nominal > 0))
+        if not bad.any():
+            return
+        states = (ctypes.c_double * n)()
+        self.get_x(states, n)
+        given = nominal[bad].tolist()
+        nominal[bad] = np.maximum(np.abs(np.nan_to_num(np.asarray(states)[bad])), 1.0)
+        if "nominals" not in self.instance.said:
+            self.instance.said.add("nominals")
+            logger.warning(
+                "%s: the FMU gives invalid nominals %s for %d of its %d continuous states "
+                "(they must be positive); fmuid uses max(|x|, 1) instead, for CVode's absolute "
+                "tolerances", self.instance.model.model_name, given, int(bad.sum()), n,
+            )  # fmt: skip
 
     def apply(self, t: float) -> None:
         """Do nothing: inputs are set in :meth:`set_time` (fmpy's solver calls this)."""
@@ -131,14 +163,7 @@ def run_model_exchange(
             return result, times[0]
         instance.call("EnterContinuousTimeMode", when=f"at t = {times[0]} s")
         model = _Model(instance, plan, inputs)
-        solver = CVodeSolver(
-            nx=description.numberOfContinuousStates, nz=description.numberOfEventIndicators,
-            get_x=model.get_x, set_x=model.set_x, get_dx=model.get_dx, get_z=model.get_z,
-            get_nominals=model.get_nominals, set_time=model.set_time, input=model,
-            startTime=times[0], maxStep=max(times[-1] - times[0], 1e-9) / 50,
-            relativeTolerance=RTOL, maxNumSteps=MAX_STEPS,
-        )  # fmt: skip
-        _raise(model)
+        solver = _solver(instance, model, description, times)
         completed = bool(description.modelExchange.needsCompletedIntegratorStep)
         for k, t in enumerate(times):
             if k:
@@ -179,12 +204,9 @@ def _integrate(
         t_stop = t_event if t_event is not None and t < t_event < t_end else t_end
         try:
             state_event, _, t_reached = solver.step(t, t_stop)
-        except RuntimeError as exc:
-            raise FmuError(
-                f"FMU {instance.model.model_name}: CVode failed between t = {t} s and "
-                f"{t_stop} s: {exc}",
-                function="CVode",
-            ) from exc
+        except Exception as exc:  # fmpy raises RuntimeError, bare Exception or TypeError
+            _raise(model)
+            raise _cvode_error(instance, solver, f"between t = {t} s and {t_stop} s") from exc
         _raise(model)
         model.set_time(t_reached)
         _raise(model)
@@ -203,6 +225,43 @@ def _integrate(
             solver.reset(t_reached)
         t = t_end if abs(t_reached - t_end) <= 1e-12 * max(1.0, abs(t_end)) else t_reached
     return t_event
+
+
+def _solver(instance: Instance, model: _Model, description: Any, times: list[float]) -> CVodeSolver:
+    """Create the CVode solver at the first grid time, with SUNDIALS' stderr line silenced."""
+    try:
+        solver = CVodeSolver(
+            nx=description.numberOfContinuousStates, nz=description.numberOfEventIndicators,
+            get_x=model.get_x, set_x=model.set_x, get_dx=model.get_dx, get_z=model.get_z,
+            get_nominals=model.get_nominals, set_time=model.set_time, input=model,
+            startTime=times[0], maxStep=max(times[-1] - times[0], 1e-9) / 50,
+            relativeTolerance=RTOL, maxNumSteps=MAX_STEPS,
+        )  # fmt: skip
+    except Exception as exc:  # fmpy raises a bare Exception when a CVode set-up call fails
+        _raise(model)
+        raise FmuError(
+            f"FMU {instance.model.model_name}: the model-exchange solver (SUNDIALS CVode) could "
+            f"not be set up at t = {times[0]} s for its "
+            f"{description.numberOfContinuousStates} states: {exc}",
+            function="CVode",
+        ) from exc
+    _raise(model)
+    _clear_handlers(solver.sunctx)
+    SUNContext_PushErrHandler(solver.sunctx, solver.ehfun_, None)
+    _no_hnil_warnings(solver.cvode_mem, -1)  # no "t + h = t" lines on stderr
+    return solver
+
+
+def _cvode_error(instance: Instance, solver: CVodeSolver, span: str) -> FmuError:
+    """One message for a failed CVode step: SUNDIALS' own words and what to try."""
+    info = solver.error_info
+    said = f"{info[3]} (in {info[1]}, code {info[0]})" if info else "no message from SUNDIALS"
+    return FmuError(
+        f"FMU {instance.model.model_name}: the model-exchange solver (SUNDIALS CVode, relative "
+        f"tolerance {RTOL}) failed {span}: {said}; the model may be stiff or singular there at "
+        "these parameters (narrow the bounds), or use its co-simulation interface",
+        function="CVode",
+    )
 
 
 def _raise(model: _Model) -> None:

@@ -26,6 +26,7 @@ import numpy as np
 
 from fmuid.errors import FmuError, FmuidError
 from fmuid.model.base import INPUT_STEP, SimulatorBase
+from fmuid.model.feedback import Feedback
 from fmuid.model.fmu import FmuModel
 from fmuid.model.simulator import Simulator
 
@@ -110,13 +111,21 @@ class HostedSimulator(SimulatorBase):
         input_values: Mapping[str, np.ndarray],
         output_time: np.ndarray,
         outputs: Sequence[str],
+        feedback: Feedback | None = None,
     ) -> np.ndarray:
         """Simulate once in the child process; as :meth:`Simulator.simulate`."""
         if self._child is None or self._runs >= self.runs_per_process:
             self._replace_child()
         assert self._child is not None
         self._runs += 1
-        request = (dict(params), input_time, dict(input_values), output_time, list(outputs))
+        request = (
+            dict(params),
+            input_time,
+            dict(input_values),
+            output_time,
+            list(outputs),
+            feedback,
+        )
         try:
             self._child.conn.send(request)
             kind, *answer = self._child.conn.recv()

@@ -55,6 +55,8 @@ class Instance:
         self.v3 = model.fmi_version == "3.0"
         self.prefix = "fmi3" if self.v3 else "fmi2"
         self.messages: list[str] = []
+        self.said: set[str] = set()
+        """Topics of warnings already logged for this instance (each is said once)."""
         classes = {(False, True): FMU2Slave, (False, False): FMU2Model,
                    (True, True): FMU3Slave, (True, False): FMU3Model}  # fmt: skip
         cls = classes[(self.v3, model.is_cosimulation)]
@@ -76,6 +78,7 @@ class Instance:
         self.component: Any = None
         self._v3_step: tuple[Any, Any] = (None, None)
         self.instantiations = 0
+        self._set_up = False
         if not self.v3:
             self._callbacks = fmi2CallbackFunctions()
             self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log2)
@@ -135,10 +138,12 @@ class Instance:
             ) from exc
         self.component = self.fmu.component
         self.instantiations += 1
+        self._set_up = False
 
     def reset(self) -> bool:
         """``fmi2Reset``/``fmi3Reset``; False when it fails (the caller instantiates again)."""
         self.messages.clear()
+        self._set_up = False
         return bool(self.f[self.prefix + "Reset"](self.component) <= 1)
 
     def free(self) -> None:
@@ -313,15 +318,31 @@ class Instance:
                 return float(when.value)
         raise self.fail(f"{self.prefix}DoStep", status, f"in the step from t = {t} s")
 
-    def enter_initialization(self, t0: float, tolerance: float | None) -> None:
-        """Set up the experiment at ``t0`` and enter initialization mode."""
+    def setup_experiment(self, t0: float, tolerance: float | None) -> None:
+        """Call ``fmi2SetupExperiment`` at ``t0`` (FMI 3.0: nothing, see below).
+
+        FMI 3.0 has no such call: the start time and tolerance go with
+        ``fmi3EnterInitializationMode``. Called right after instantiation or a reset, before
+        the parameters are set, as the standard's examples and FMPy do: some exporters (20-sim)
+        re-apply their start values in ``fmi2SetupExperiment``, so that a value set before it
+        would be lost.
+        """
+        if self.v3 or self._set_up:
+            return
         tol = (1, tolerance) if tolerance is not None else (0, 0.0)
+        self.call("SetupExperiment", *tol, t0, 0, 0.0, when=f"at t = {t0} s")
+        self._set_up = True
+
+    def enter_initialization(self, t0: float, tolerance: float | None) -> None:
+        """Enter initialization mode at ``t0`` (setting up the experiment first if not done)."""
         when = f"at t = {t0} s"
         if self.v3:
+            tol = (1, tolerance) if tolerance is not None else (0, 0.0)
             self.call("EnterInitializationMode", *tol, t0, 0, 0.0, when=when)
-        else:
-            self.call("SetupExperiment", *tol, t0, 0, 0.0, when=when)
-            self.call("EnterInitializationMode", when=when)
+            return
+        self.setup_experiment(t0, tolerance)
+        self.call("EnterInitializationMode", when=when)
+        self._set_up = False
 
     def update_discrete_states(self, t: float) -> tuple[bool, float | None]:
         """Event iteration in event mode: (terminate requested, next time event or None)."""

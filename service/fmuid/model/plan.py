@@ -5,11 +5,27 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
 from fmuid.errors import FmuError
 from fmuid.model.fmu import Variable
+
+
+class GridArrays(NamedTuple):
+    """A plan as contiguous arrays, for the native master loop.
+
+    ``rows[row_start[k]:row_start[k + 1]]`` are the rows read at grid point ``k``; ``moving``
+    says whether some input changes over each interval.
+    """
+
+    times: np.ndarray
+    value: np.ndarray
+    slope: np.ndarray
+    moving: np.ndarray
+    row_start: np.ndarray
+    rows: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -50,6 +66,19 @@ class RunPlan:
     def breakpoint(self) -> np.ndarray:
         """Whether each grid point is an input sample time (the slopes may change there)."""
         return np.isin(self.times, self.input_time)
+
+    @cached_property
+    def arrays(self) -> GridArrays:
+        """The plan as contiguous float64, uint8 and int64 arrays (made once per plan)."""
+        counts = [len(rows) for rows in self.rows_at]
+        return GridArrays(
+            np.ascontiguousarray(self.times, dtype=np.float64),
+            np.ascontiguousarray(self.value, dtype=np.float64),
+            np.ascontiguousarray(self.slope, dtype=np.float64),
+            np.ascontiguousarray(np.any(self.slope, axis=1), dtype=np.uint8),
+            np.concatenate(([0], np.cumsum(counts))).astype(np.int64),
+            np.array([r for rows in self.rows_at for r in rows], dtype=np.int64),
+        )
 
     @property
     def stop(self) -> float:

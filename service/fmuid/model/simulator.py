@@ -28,6 +28,7 @@ from fmuid.model.base import INPUT_STEP, SimulatorBase
 from fmuid.model.channels import Channels
 from fmuid.model.cosim import run_cosimulation
 from fmuid.model.exchange import RTOL, run_model_exchange
+from fmuid.model.feedback import Feedback, feedback_inputs, fine_times, run_feedback
 from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
 from fmuid.model.plan import RunPlan, make_plan
@@ -55,6 +56,9 @@ class Simulator(SimulatorBase):
         The parsed FMU.
     reset_reliable
         None until the first run; then whether a reset run equals a fresh instance's run.
+    native
+        Whether co-simulation runs use the compiled master loop where it can run
+        (:mod:`fmuid.model.native`); False: the Python loop, the reference.
 
     Raises
     ------
@@ -79,6 +83,7 @@ class Simulator(SimulatorBase):
         self._fresh = True
         self._terminated = False
         self.reset_reliable = reset_reliable
+        self.native = True
         self._channels: dict[tuple[str, ...], Channels] = {}
         self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], RunPlan]] = {}
 
@@ -124,6 +129,7 @@ class Simulator(SimulatorBase):
         input_values: Mapping[str, np.ndarray],
         output_time: np.ndarray,
         outputs: Sequence[str],
+        feedback: Feedback | None = None,
     ) -> np.ndarray:
         """Simulate once and return the outputs at the output times.
 
@@ -147,6 +153,10 @@ class Simulator(SimulatorBase):
             after initialization.
         outputs
             Names of FMU outputs (Real/Float, Integer, Enumeration or Boolean as 0/1).
+        feedback
+            Terms of the FMU's own outputs added to its inputs at every step of at most
+            ``feedback.step`` (:mod:`fmuid.model.feedback`; co-simulation only); an input that
+            receives a term but is not in ``input_values`` is driven by the terms alone.
 
         Returns
         -------
@@ -164,6 +174,10 @@ class Simulator(SimulatorBase):
             If the times or input arrays are malformed.
 
         """
+        if feedback is not None:
+            return self._simulate_feedback(
+                params, input_time, input_values, output_time, outputs, feedback
+            )
         par = self._channels_for(tuple(params), "parameter")
         inputs = self._channels_for(tuple(input_values), "input")
         out = self._channels_for(tuple(outputs), "output")
@@ -186,6 +200,51 @@ class Simulator(SimulatorBase):
                     status="terminateSimulation",
                 )
         return result
+
+    def _simulate_feedback(
+        self,
+        params: Mapping[str, float | str],
+        input_time: np.ndarray,
+        input_values: Mapping[str, np.ndarray],
+        output_time: np.ndarray,
+        outputs: Sequence[str],
+        feedback: Feedback,
+    ) -> np.ndarray:
+        """Run with the feedback terms closed around the FMU (see :meth:`simulate`)."""
+        if not self.model.is_cosimulation:
+            raise FmuError(
+                f"FMU {self.model.model_name}: feedback of outputs into inputs needs the "
+                "co-simulation interface; this FMU is run by model exchange"
+            )
+        values_in = feedback_inputs(feedback, input_time, dict(input_values))
+        par = self._channels_for(tuple(params), "parameter")
+        inputs = self._channels_for(tuple(values_in), "input")
+        out = self._channels_for(tuple(outputs), "output")
+        sources = self._channels_for(feedback.sources, "output")
+        t_out = np.asarray(output_time, dtype=float)
+        fine = fine_times(t_out, feedback.step)
+        plan = self._plan(input_time, values_in, inputs, fine)
+        instance = self._start()
+        t0 = plan.times[0]
+        instance.setup_experiment(t0, None)
+        if par.size:
+            instance.set(par, list(params.values()), None)
+        instance.enter_initialization(t0, None)
+        instance.set(inputs, plan.value[0].tolist(), t0)
+        instance.call("ExitInitializationMode", when=f"at t = {t0} s")
+        result, stopped = run_feedback(
+            instance, plan, inputs, out, sources, feedback, self.model.can_interpolate_inputs
+        )
+        self._terminated = stopped is not None
+        rows = np.searchsorted(fine, t_out)
+        if stopped is not None and np.any(np.isnan(result[rows])):
+            raise FmuError(
+                f"FMU {self.model.model_name} stopped the simulation at t = {stopped} s "
+                "with feedback closed around it, before the last output time",
+                function=f"{self._instance.prefix}DoStep",
+                status="terminateSimulation",
+            )
+        return result[rows]
 
     def _plan(
         self,
@@ -255,9 +314,10 @@ class Simulator(SimulatorBase):
     ) -> tuple[np.ndarray, float | None]:  # fmt: skip
         instance = self._start()
         t0 = plan.times[0]
+        cosim = self.model.is_cosimulation
+        instance.setup_experiment(t0, None if cosim else RTOL)
         if par.size:
             instance.set(par, values, None)
-        cosim = self.model.is_cosimulation
         instance.enter_initialization(t0, None if cosim else RTOL)
         if inputs.size:
             instance.set(inputs, plan.value[0].tolist(), t0)
@@ -265,7 +325,7 @@ class Simulator(SimulatorBase):
         if not cosim:
             return run_model_exchange(instance, plan, inputs, out)
         step = None if self.model.can_interpolate_inputs else self.input_step
-        return run_cosimulation(instance, plan, inputs, out, step)
+        return run_cosimulation(instance, plan, inputs, out, step, self.native)
 
     def close(self) -> None:
         """Free the FMU instance, unload its library and delete the extracted files."""

@@ -121,7 +121,7 @@ def settle_branch(
         ends = {
             kind: locate(
                 problem, index, chi2_hat, float(z_hat[index]), t, side, options.refit,
-                options.end_tolerance,
+                options.end_tolerance, outermost=options.overshoot > 0,
             )
             for kind, t in thresholds.items()
         }  # fmt: skip
@@ -171,6 +171,11 @@ def settle_branch(
     for kind, end in ends.items():
         if not end.settled:
             counts.unsettled.append(f"the {kind} end was not located to the tolerance")
+        if end.beyond:
+            counts.unsettled.append(
+                f"the profile is back under the {kind} threshold where the walk ended, beyond "
+                "its outermost crossing: the end may lie further out"
+            )
     quality = ProfileQuality(
         checks=counts.checks,
         starts=counts.starts,

@@ -11,6 +11,7 @@ from scipy.stats import qmc
 from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
+from fmuid.profiling.health import GRID_SIDE
 from fmuid.profiling.points import WalkPoint
 
 
@@ -36,6 +37,11 @@ class CheckOptions:
         Re-walks per branch after which the branch is reported unsettled.
     refit
         Tolerances of the re-fits from diverse starts.
+    health_grid
+        Grid points on each side of the estimate along each parameter in the health check
+        (:func:`fmuid.profiling.health.check_health`): fewer make it shorter for slow FMUs
+        (it logs how many runs it makes at the measured cost per run); below 3 it looks for
+        no jumps.
 
     """
 
@@ -47,6 +53,7 @@ class CheckOptions:
     refit: FitOptions = field(
         default_factory=lambda: FitOptions(ftol=1e-6, xtol=1e-6, gtol=1e-6, max_nfev=150)
     )
+    health_grid: int = GRID_SIDE
 
 
 def diverse_starts(problem: Problem, n: int, seed: Sequence[int]) -> np.ndarray:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -35,6 +35,9 @@ class End:
     why_open
         For an open end: ``"bound"`` (the profile stays under the threshold up to the
         parameter's bound) or ``"walk stopped"`` (failed points or the point cap ended the walk).
+    beyond
+        The crossing is the outermost one walked, but the profile was back under the threshold
+        where the walk ended (a non-smooth objective): the end may lie further out.
 
     """
 
@@ -43,6 +46,7 @@ class End:
     refits: int = 0
     settled: bool = True
     why_open: str = ""
+    beyond: bool = False
 
 
 def rise_root(chi2: float, chi2_hat: float) -> float:
@@ -51,17 +55,22 @@ def rise_root(chi2: float, chi2_hat: float) -> float:
 
 
 def bracket(
-    side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float
-) -> tuple[WalkPoint, WalkPoint] | None:
-    """Return the first pair of consecutive good points that straddles the threshold.
+    side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float,
+    outermost: bool = False,
+) -> tuple[WalkPoint, WalkPoint] | None:  # fmt: skip
+    """Return the first (or outermost) pair of consecutive good points rising over the threshold.
 
     ``side`` runs from the estimate outwards (estimate first); failed points are skipped.
     """
     ok = [p for p in side if p.error is None and np.isfinite(p.chi2)]
-    for p0, p1 in zip(ok, ok[1:]):
-        if p0.chi2 - chi2_hat < threshold <= p1.chi2 - chi2_hat:
-            return p0, p1
-    return None
+    pairs = [
+        (p0, p1)
+        for p0, p1 in zip(ok, ok[1:])
+        if p0.chi2 - chi2_hat < threshold <= p1.chi2 - chi2_hat
+    ]
+    if not pairs:
+        return None
+    return pairs[-1] if outermost else pairs[0]
 
 
 def locate(
@@ -73,6 +82,7 @@ def locate(
     side: Sequence[WalkPoint],
     options: FitOptions,
     tolerance: float = 1e-3,
+    outermost: bool = False,
 ) -> End:
     """Locate the crossing of ``chi2_hat + threshold`` on one side by root-finding on re-fits.
 
@@ -100,6 +110,9 @@ def locate(
         Tolerances of the re-fits.
     tolerance
         Accuracy of the end, as a fraction of the half-width.
+    outermost
+        Locate the outermost crossing of the walked points rather than the first (a non-smooth
+        objective); ``beyond`` tells whether the last good point is back under the threshold.
 
     Returns
     -------
@@ -107,9 +120,27 @@ def locate(
         With ``z=None`` when ``side`` does not straddle the threshold.
 
     """
-    pair = bracket(side, index, chi2_hat, threshold)
+    pair = bracket(side, index, chi2_hat, threshold, outermost)
     if pair is None:
         return End(None)
+    end = _root(problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance)
+    ok = [p for p in side if p.error is None and np.isfinite(p.chi2)]
+    if outermost and ok[-1].chi2 - chi2_hat < threshold:
+        return replace(end, beyond=True)
+    return end
+
+
+def _root(
+    problem: Problem,
+    index: int,
+    chi2_hat: float,
+    z_hat_i: float,
+    threshold: float,
+    pair: tuple[WalkPoint, WalkPoint],
+    options: FitOptions,
+    tolerance: float,
+) -> End:
+    """Regula falsi (Illinois) on re-fits inside the bracketing ``pair`` (see :func:`locate`)."""
     a, b = pair
     target = np.sqrt(threshold)
     free = np.ones(problem.n_free, bool)

@@ -18,8 +18,8 @@ from fmuid.estimation.space import z_to_value
 from fmuid.model.registry import fmu_summary
 from fmuid.profiling.branch import BranchResult
 from fmuid.profiling.checks import check_fit, distinct_valleys
-from fmuid.profiling.health import check_health
-from fmuid.profiling.intervals import is_flat, label, open_reason
+from fmuid.profiling.health import NOISY_FRACTION, check_health
+from fmuid.profiling.intervals import is_flat, label, noise_limited, open_reason, profile_noise
 from fmuid.profiling.parallel import BranchTask, run_branches
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
@@ -31,6 +31,9 @@ log = logging.getLogger(__name__)
 
 #: How often a better optimum found on a profile may restart the profiles.
 MAX_RESTARTS = 3
+#: The jumps of a walked profile are measured where it rises by at most this many simultaneous
+#: thresholds (around its ends; further out the profile is steeper and its jumps larger).
+NOISE_REACH = 1.5
 
 
 def thresholds(confidence: float, n_free: int) -> dict[str, float]:
@@ -55,12 +58,15 @@ def profile_problem(
     """Profile likelihoods of the free parameters around a fit.
 
     A health check of the objective comes first (non-smooth FMUs get larger finite-difference
-    steps, polished re-fits and checks at every end); a fit without global search is checked
-    from diverse starts (full studies only, ``only=None``). Every parameter is then walked in
-    both directions (branches run in parallel), its pointwise and simultaneous CI ends are
-    located by root-finding on re-fits, the ends are checked for a lower valley, and it is
-    labelled. If a profile finds a lower chi2 than the optimum, the fit is refined from there
-    and the profiles are redone (``better_optimum_found``). See ``docs/profiles.md``.
+    steps, polished re-fits and checks at every end, and each branch walks as far again past
+    its first crossing, the outermost crossing being the end; where chi2 jumps by a tenth of
+    the pointwise threshold or more, no end is labelled ``identifiable``); a fit without
+    global search is checked from diverse starts (full studies only, ``only=None``). Every
+    parameter is then walked in both directions (branches run in parallel), its pointwise and
+    simultaneous CI ends are located by root-finding on re-fits, the ends are checked for a
+    lower valley, and it is labelled. If a profile finds a lower chi2 than the optimum, the fit
+    is refined from there and the profiles are redone (``better_optimum_found``). See
+    ``docs/profiles.md``.
 
     Parameters
     ----------
@@ -93,12 +99,16 @@ def profile_problem(
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
-    health = check_health(problem, fit.z_estimate(), fit.jacobian)
+    health = check_health(
+        problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
+    )
     sims += health.simulations
     if not health.smooth:
         log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
         refit = replace(options.refit, diff_step=health.diff_step, polish=True)
         options = replace(options, refit=refit, checks=replace(options.checks, always=True))
+    if not health.smooth:
+        options = replace(options, overshoot=1.0)
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
     if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
@@ -143,7 +153,8 @@ def profile_problem(
     for name in names:
         i = problem.names.index(name)
         sides = [b for b in branches if b.index == i]
-        profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check)
+        floor = health.chi2_noise.get(name, 0.0) if options.overshoot else None
+        profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check, floor)
     sims += problem.simulations - s0
     fit_check["valleys"] = len(valleys)
     if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
@@ -220,7 +231,14 @@ def _assemble(
     thr: dict[str, float],
     sd_z: float,
     check: dict[str, Any],
+    floor: float | None = None,
 ) -> ParameterProfile:
+    """Put one parameter's profile together from its branches and label it.
+
+    ``floor`` (the health check's chi2 noise along the parameter; None for a smooth objective)
+    is raised to the largest jump of the walked profile; when that is comparable to the
+    pointwise threshold, the label says how far the noise could move the ends.
+    """
     name = problem.names[index]
     estimate_point = ProfilePoint(
         value=fit.estimates[name],
@@ -261,6 +279,20 @@ def _assemble(
     flat = is_flat(points, fit.chi2, thr["simultaneous"])
     partners, meaning = _null_direction(problem, name, check, flat, walks)
     status, reason = label(name, flat, sim, (why_open[0], why_open[1]), partners, meaning)
+    if floor is not None:
+        near = NOISE_REACH * thr["simultaneous"]
+        good = [
+            (z, p.chi2)
+            for d in (-1, 1)
+            for z, p in walks[d]
+            if p.error is None and p.chi2 - fit.chi2 <= near
+        ]
+        good.append((float(fit.z_estimate()[index]), float(fit.chi2)))
+        noise = max(floor, profile_noise([z for z, _ in good], [c for _, c in good], fit.chi2))
+        if noise >= NOISY_FRACTION * thr["pointwise"]:
+            status, reason = noise_limited(
+                status, reason, noise, thr["simultaneous"], sim, fit.estimates[name]
+            )
     return ParameterProfile(
         name=name,
         estimate=fit.estimates[name],

@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
+import logging
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from fmuid.errors import FmuidError
+from fmuid.errors import FmuError, FmuidError
 from fmuid.estimation.optimize import safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.model.simulator import Simulator
+from fmuid.model.smoke import held_parameters
+from fmuid.progress import Progress, ProgressCallback
+
+log = logging.getLogger(__name__)
 
 #: Relative step of the noise probe (scipy's default finite-difference step in fitted coordinates).
 PROBE_STEP = 1e-6
@@ -25,6 +31,9 @@ GRID_SPAN = 2e-3
 SIGNAL_TO_NOISE = 1e3
 #: Largest finite-difference step (relative, fitted coordinates).
 MAX_DIFF_STEP = 1e-2
+#: Jumps of chi2 (here or along a walked profile) of this fraction of the pointwise threshold
+#: limit the intervals: the label says by how much the jumps could move the ends.
+NOISY_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
@@ -45,10 +54,16 @@ class Health:
         Per parameter: points of a grid along the parameter alone (steps of half its
         conditional standard deviation, at most ``GRID_SPAN`` of its range) where chi2 departs
         from a smooth (quartic) curve.
+    chi2_noise
+        Per parameter: the largest departure of chi2 on that grid from the smooth curve, in
+        chi2 units (the jumps' size; a smooth FMU's is round-off).
     diff_step
         The finite-difference step chosen for the re-fits (relative, fitted coordinates).
     simulations
         Simulations spent on the check.
+    no_effect
+        Free parameters that move no output at the estimate although the FMU holds the value
+        set (a zero column of the sensitivities; the structural check names them).
 
     """
 
@@ -56,8 +71,10 @@ class Health:
     reset_matches_fresh: bool | None
     noise_floor: dict[str, float] = field(default_factory=dict)
     jumps: dict[str, int] = field(default_factory=dict)
+    chi2_noise: dict[str, float] = field(default_factory=dict)
     diff_step: float = PROBE_STEP
     simulations: int = 0
+    no_effect: tuple[str, ...] = ()
 
     @property
     def smooth(self) -> bool:
@@ -68,6 +85,11 @@ class Health:
         """
         return self.deterministic and not any(self.jumps.values()) and self.diff_step <= PROBE_STEP
 
+    @property
+    def noise_floor_chi2(self) -> float:
+        """The largest jump of chi2 along any one parameter (chi2 units)."""
+        return max(self.chi2_noise.values(), default=0.0)
+
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the check."""
         return {
@@ -76,12 +98,51 @@ class Health:
             "reset_matches_fresh": self.reset_matches_fresh,
             "noise_floor": dict(self.noise_floor),
             "jumps": dict(self.jumps),
+            "chi2_noise": dict(self.chi2_noise),
+            "noise_floor_chi2": self.noise_floor_chi2,
             "diff_step": self.diff_step,
             "simulations": self.simulations,
+            "no_effect": list(self.no_effect),
         }
 
 
-def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> Health:
+class _Meter:
+    """Evaluates the residuals, counts the evaluations and says how long the rest will take."""
+
+    def __init__(self, problem: Problem, total: int, progress: ProgressCallback | None) -> None:
+        self.problem, self.total, self.progress = problem, total, progress
+        self.done = 0
+        self.seconds = 0.0
+
+    def __call__(self, z: np.ndarray) -> np.ndarray:
+        t0 = time.perf_counter()
+        r = safe_residuals(self.problem, z)
+        self.seconds += time.perf_counter() - t0
+        self.done += 1
+        per_run = self.seconds / self.done
+        if self.done == 1:
+            log.info(
+                "health check: %d runs of the %d experiment(s) at %.3g s each, about %.0f s "
+                "(shorten it with CheckOptions.health_grid)",
+                self.total, len(self.problem.experiments), per_run, per_run * self.total,
+            )  # fmt: skip
+        if self.progress is not None:
+            left = per_run * max(self.total - self.done, 0)
+            self.progress(
+                Progress(
+                    "health", self.done, self.total, f"{per_run:.3g} s per run, {left:.0f} s left"
+                )
+            )
+        return r
+
+
+def check_health(
+    problem: Problem,
+    z_hat: np.ndarray,
+    jacobian: np.ndarray,
+    progress: ProgressCallback | None = None,
+    grid_side: int = GRID_SIDE,
+) -> Health:
     """Probe the objective around the estimate.
 
     Parameters
@@ -93,46 +154,117 @@ def check_health(problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray) -> H
     jacobian
         Weighted residual Jacobian at the estimate (fitted coordinates); its column norms set
         the grid steps.
+    progress
+        Receives ``Progress("health", done, total, detail)`` after each run of the experiments
+        (the detail says the measured cost per run and the time left); the first run's cost
+        and the number of runs are also logged.
+    grid_side
+        Grid points on each side of the estimate along each parameter (``GRID_SIDE``; fewer
+        make a shorter check for slow FMUs; below 3 no jumps are looked for).
 
     Returns
     -------
     Health
         With ``diff_step`` raised above the noise floor where the residuals are noisy.
 
+    Raises
+    ------
+    FmuError
+        When a free parameter moves no output and the FMU does not hold the value set (it
+        ignored it; see :func:`ignored_parameters`).
+
     """
     sims0 = problem.simulations
+    no_effect = ignored_parameters(problem, z_hat, jacobian)
     fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
-    r0 = safe_residuals(problem, z_hat)
-    deterministic = bool(np.array_equal(r0, safe_residuals(problem, z_hat)))
+    residuals = _Meter(problem, 2 + len(problem.names) * (4 + 2 * grid_side), progress)
+    r0 = residuals(z_hat)
+    deterministic = bool(np.array_equal(r0, residuals(z_hat)))
     noise: dict[str, float] = {}
     jumps: dict[str, int] = {}
+    chi2_noise: dict[str, float] = {}
     steps = [PROBE_STEP]
     lo, hi = problem.z_lower, problem.z_upper
-    for i, name in enumerate(problem.names):
-        scale = max(1.0, abs(float(z_hat[i])))
-        h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
-        rows = [r0] + [safe_residuals(problem, _moved(z_hat, i, k * h)) for k in range(1, 5)]
-        fourth = rows[0] - 4 * rows[1] + 6 * rows[2] - 4 * rows[3] + rows[4]
-        noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
-        slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
-        if noise[name] > 0 and slope > 0:
-            steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
-        norm = float(np.linalg.norm(jacobian[:, i]))
-        d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
-        grid = np.clip(z_hat[i] + d * np.arange(-GRID_SIDE, GRID_SIDE + 1), lo[i], hi[i])
-        grid = np.unique(grid)
-        chi2 = np.array(
-            [float(r0 @ r0) if g == z_hat[i] else _chi2(problem, _at(z_hat, i, g)) for g in grid]
-        )
-        jumps[name] = _departures(grid, chi2)
+    with np.errstate(over="ignore", invalid="ignore"):  # outputs that overflow at wide bounds
+        for i, name in enumerate(problem.names):
+            scale = max(1.0, abs(float(z_hat[i])))
+            h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
+            rows = [r0] + [residuals(_moved(z_hat, i, k * h)) for k in range(1, 5)]
+            fourth = rows[0] - 4 * rows[1] + 6 * rows[2] - 4 * rows[3] + rows[4]
+            noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
+            slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
+            if noise[name] > 0 and slope > 0:
+                steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
+            norm = float(np.linalg.norm(jacobian[:, i]))
+            d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
+            grid = np.clip(z_hat[i] + d * np.arange(-grid_side, grid_side + 1), lo[i], hi[i])
+            grid = np.unique(grid)
+            rows = [r0 if g == z_hat[i] else residuals(_at(z_hat, i, g)) for g in grid]
+            chi2 = np.array([float(r @ r) for r in rows])
+            jumps[name], chi2_noise[name] = _departures(grid, chi2)
     return Health(
         deterministic=deterministic,
         reset_matches_fresh=fresh,
         noise_floor=noise,
         jumps=jumps,
+        chi2_noise=chi2_noise,
         diff_step=float(min(max(steps), MAX_DIFF_STEP)),
         simulations=problem.simulations - sims0,
+        no_effect=no_effect,
     )
+
+
+def ignored_parameters(
+    problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray
+) -> tuple[str, ...]:
+    """Check that every free parameter with a zero sensitivity column is held by the FMU.
+
+    A zero column means the parameter moves no output. When the FMU gives back the value set,
+    the model does not use the parameter here (a structural finding); when it gives back
+    another value or none, the FMU ignored what fmuid set (as 20-sim's FMUs do with a value set
+    before ``fmi2SetupExperiment``), and every answer about that parameter would be wrong.
+
+    Returns
+    -------
+    tuple of str
+        The free parameters that move no output although the FMU holds their values.
+
+    Raises
+    ------
+    FmuError
+        Naming the parameters the FMU ignored, the value set and the value it holds.
+
+    """
+    dead = tuple(name for i, name in enumerate(problem.names) if not np.any(jacobian[:, i]))
+    predictor = problem.predictor
+    if not dead or not isinstance(predictor, FmuPredictor):
+        return dead
+    values = {**predictor.fixed, **problem.from_z(z_hat)}
+    model = predictor.model
+    try:
+        held = held_parameters(model, values)
+    except FmuError as exc:
+        raise FmuError(
+            f"FMU {model.model_name}: {', '.join(dead)} move(s) no output, and reading the "
+            f"value back failed ({exc}), so the FMU probably ignored what fmuid set",
+            function=exc.function,
+            status=exc.status,
+        ) from exc
+    ignored = [n for n in dead if not np.isclose(held[n], float(values[n]), rtol=1e-9, atol=0.0)]
+    if ignored:
+        said = ", ".join(f"{n} set to {float(values[n]):.6g} holds {held[n]:.6g}" for n in ignored)
+        raise FmuError(
+            f"FMU {model.model_name} ignored the parameter(s) {', '.join(ignored)}: they move "
+            f"no output, and after initialization the FMU holds another value than fmuid set "
+            f"({said}); it may re-apply its start values after they are set, or not read them "
+            "from the master at all; fix the FMU's export (or fix these parameters in the spec)",
+            function="fmi3SetFloat64" if model.fmi_version == "3.0" else "fmi2SetReal",
+        )
+    log.warning(
+        "%s move(s) no output of FMU %s at the estimate (a zero sensitivity column)",
+        ", ".join(dead), model.model_name,
+    )  # fmt: skip
+    return dead
 
 
 def _moved(z: np.ndarray, i: int, dz: float) -> np.ndarray:
@@ -147,19 +279,17 @@ def _at(z: np.ndarray, i: int, zi: float) -> np.ndarray:
     return out
 
 
-def _chi2(problem: Problem, z: np.ndarray) -> float:
-    r = safe_residuals(problem, z)
-    return float(r @ r)
+def _departures(grid: np.ndarray, chi2: np.ndarray) -> tuple[int, float]:
+    """Count the points off a least-squares quartic by 1 % of chi2's range; the largest offset.
 
-
-def _departures(grid: np.ndarray, chi2: np.ndarray) -> int:
-    """Points where chi2 departs from a least-squares quartic by 1 % of its range."""
-    if grid.size < 7 or not np.all(np.isfinite(chi2)):
-        return 0
+    The offset is in chi2 units.
+    """
+    if grid.size < 7 or not np.all(np.isfinite(chi2)):  # a quartic needs more than five points
+        return 0, 0.0
     x = (grid - grid.mean()) / (np.ptp(grid) or 1.0)
-    fit = np.polyval(np.polyfit(x, chi2, 4), x)
+    off = np.abs(chi2 - np.polyval(np.polyfit(x, chi2, 4), x))
     spread = max(float(np.ptp(chi2)), 1e-9 * max(1.0, float(np.max(np.abs(chi2)))))
-    return int(np.sum(np.abs(chi2 - fit) > 0.01 * spread))
+    return int(np.sum(off > 0.01 * spread)), float(np.max(off))
 
 
 def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:

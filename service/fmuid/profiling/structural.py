@@ -23,7 +23,9 @@ def structural_check(
 ) -> dict[str, Any]:
     """Singular values of the weighted sensitivity matrix and its near-null directions.
 
-    A singular value near zero means that moving the parameters along the corresponding
+    A parameter whose column is zero (or below ``NULL_TOLERANCE`` of the largest column) moves
+    no output: it is a null direction on its own, even when every column is zero. Among the
+    others, a singular value near zero means that moving the parameters along the corresponding
     right singular vector leaves every output unchanged: those parameters are identifiable only
     in combination. For two parameters the combination is named when it is a sum, difference,
     product or ratio (e.g. springs in parallel: only ``k1 + k2``).
@@ -43,23 +45,36 @@ def structural_check(
         ``parameters``, unit ``direction`` in fitted coordinates and ``meaning``).
 
     """
-    _, s, vt = np.linalg.svd(jacobian, full_matrices=False)
-    combos = []
-    if s.size and s[0] > 0:
-        for k in np.nonzero(s < NULL_TOLERANCE * s[0])[0]:
-            v = vt[k] / np.max(np.abs(vt[k]))
-            v = v if v[np.argmax(np.abs(v))] > 0 else -v
-            involved = [i for i in range(len(names)) if abs(v[i]) > 0.05]
-            combos.append(
-                {
-                    "parameters": [names[i] for i in involved],
-                    "direction": [round(float(vt[k][i]), 6) for i in involved],
-                    "meaning": _meaning(v, involved, names, scales, estimates),
-                }
-            )
+    jacobian = np.asarray(jacobian, dtype=float).reshape(-1, len(names))
+    norms = np.linalg.norm(jacobian, axis=0)
+    largest = float(np.max(norms, initial=0.0))
+    dead = [i for i in range(len(names)) if not norms[i] > NULL_TOLERANCE * largest]
+    combos = [_combination(np.eye(len(names))[i], names, scales, estimates) for i in dead]
+    live = [i for i in range(len(names)) if i not in dead]
+    _, s, _ = np.linalg.svd(jacobian, full_matrices=False)
+    if live:
+        _, s_live, vt_live = np.linalg.svd(jacobian[:, live], full_matrices=False)
+        for k in np.nonzero(s_live < NULL_TOLERANCE * s_live[0])[0]:
+            row = np.zeros(len(names))
+            row[live] = vt_live[k]
+            combos.append(_combination(row, names, scales, estimates))
     return {
         "singular_values": [float(x) for x in s],
         "non_identifiable_combinations": combos,
+    }
+
+
+def _combination(
+    direction: np.ndarray, names: Sequence[str], scales: Sequence[str], estimates: Sequence[float]
+) -> dict[str, Any]:
+    """One null direction (a unit vector over all parameters) in the form of the result."""
+    v = direction / np.max(np.abs(direction))
+    v = v if v[np.argmax(np.abs(v))] > 0 else -v
+    involved = [i for i in range(len(names)) if abs(v[i]) > 0.05]
+    return {
+        "parameters": [names[i] for i in involved],
+        "direction": [round(float(direction[i]), 6) for i in involved],
+        "meaning": _meaning(v, involved, names, scales, estimates),
     }
 
 

@@ -43,6 +43,11 @@ class WalkOptions:
         CI ends are located to this fraction of their half-width.
     checks
         Settings of the right-valley checks at the ends and jumps.
+    overshoot
+        Past the first point over the simultaneous threshold, walk on until the distance from
+        the estimate is ``1 + overshoot`` times that point's, in ``OVERSHOOT_STEPS`` equal steps
+        (for a non-smooth objective, where the profile may cross back under the threshold;
+        0: stop at the first point over it).
 
     """
 
@@ -61,6 +66,11 @@ class WalkOptions:
     )
     end_tolerance: float = 1e-3
     checks: CheckOptions = field(default_factory=CheckOptions)
+    overshoot: float = 0.0
+
+
+#: Points walked past the first crossing when ``overshoot`` is set.
+OVERSHOOT_STEPS = 6
 
 
 def first_step(sd_z: float, threshold: float, span: float, options: WalkOptions) -> float:
@@ -124,7 +134,8 @@ def walk(
     failures = 0
     retries = 0
     last_ok = path[-1]
-    if last_ok.chi2 - chi2_hat > threshold * (1.0 + options.margin):
+    reach: float | None = None
+    if last_ok.chi2 - chi2_hat > threshold * (1.0 + options.margin) and options.overshoot <= 0:
         return points, None
     while len(points) < options.max_points:
         zi = last_ok.z[index] + direction * step
@@ -155,7 +166,8 @@ def walk(
         if point.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
             return points, point
         rise = point.chi2 - last_ok.chi2
-        if rise > options.max_rise * target and step > options.min_step * span and retries < 8:
+        steep = rise > options.max_rise * target and step > options.min_step * span
+        if reach is None and steep and retries < 8:
             points.pop()
             retries += 1
             step = max(step * max(np.sqrt(target / rise), 0.1), options.min_step * span)
@@ -163,8 +175,17 @@ def walk(
         retries = 0
         path.append(point)
         last_ok = point
-        if at_edge or point.chi2 - chi2_hat > threshold * (1.0 + options.margin):
+        distance = abs(zi - path[0].z[index])
+        if at_edge or (reach is not None and distance >= reach * (1 - 1e-9)):
             break
+        if reach is None and point.chi2 - chi2_hat > threshold * (1.0 + options.margin):
+            if options.overshoot <= 0:
+                break
+            reach = (1.0 + options.overshoot) * distance
+            step = (reach - distance) / OVERSHOOT_STEPS
+            continue
+        if reach is not None:
+            continue
         factor = np.sqrt(target / max(rise, 1e-12 * target)) if rise > 0 else 2.0
         step = float(
             np.clip(

@@ -12,6 +12,7 @@ from fmuid.errors import FmuidError
 from fmuid.estimation.problem import Problem
 from fmuid.experiment_design.discriminate import discrimination_from_dict
 from fmuid.plots import diagnosis_figures
+from fmuid.plots.levels import level_figure
 from fmuid.report.design import discrimination_section
 from fmuid.report.page import HtmlPage, fmt, interval
 
@@ -32,6 +33,8 @@ FIGURE_CAPTIONS = {
     "fit": "Data, the base model and the augmented model, per experiment and output.",
     "residuals": "Weighted residuals of both models; shaded: the located time windows.",
     "spectrum": "Residual periodogram against the white-noise floor; shaded: the located band.",
+    "levels": "The base fit's weighted residual against each output's level and its rate "
+    "(binned means and their standard errors).",
 }
 
 
@@ -182,6 +185,7 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
         table_id="summary",
         caption="Free parameters before and after the augmentation",
     )
+    _effects_and_validation(page, d)
     _tables(page, d, units)
     _whiteness(page, d)
     _settling_test(page, d.get("discriminating_experiment"))
@@ -193,9 +197,42 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
         logger.warning("diagnosis figures not drawn: %s", error)
         page.paragraph(f"Figures not drawn: {error}", note=True)
         return
+    levels = (d.get("location") or {}).get("levels")
+    if levels:
+        figures["levels"] = level_figure(levels)
     page.heading("Figures")
     for name, fig in figures.items():
         page.figure(fig, f"diagnose_{name}", FIGURE_CAPTIONS.get(name, name))
+
+
+def _effects_and_validation(page: HtmlPage, d: dict[str, Any]) -> None:
+    """Add each added effect's step, the held-out errors and where in the range the misfit sat."""
+    steps = d.get("effects") or []
+    if steps:
+        page.table(
+            ["step", "effect", "what it is", "chi2 before", "chi2 after", "p-value"],
+            [
+                [k + 1, s["effect"], s["description"], s["chi2_before"], s["chi2_after"],
+                 s["p_value"]]
+                for k, s in enumerate(steps)
+            ],
+            caption="Effects added one after another (forward selection)",
+        )  # fmt: skip
+    checked = d.get("validation") or []
+    if checked:
+        page.table(
+            ["test file", "output", "samples", "RMS error, base", "after each step", "final"],
+            [
+                [v["experiment"], v["output"], v["n"], v["rms_base"],
+                 ", ".join(f"{x:.4g}" for x in v["rms_by_step"]) or "-", v["rms_final"]]
+                for v in checked
+            ],
+            caption="Held-out data: RMS of the simulation error (output units)",
+        )  # fmt: skip
+    levels = (d.get("location") or {}).get("levels") or {}
+    words = [v["words"] for v in levels.values() if v.get("words")]
+    if words:
+        page.paragraph("Where in the range: " + "; ".join(words) + ".")
 
 
 def _settling_test(page: HtmlPage, proposal: dict[str, Any] | None) -> None:
@@ -209,7 +246,8 @@ def _units(problem: Problem | None) -> dict[str, str]:
     if problem is None:
         return {}
     units = problem.units()
-    for candidate in study_catalogue(problem):
+    start = {n: p.start for n, p in problem.parameter_specs.items()}
+    for candidate in study_catalogue(problem, start):
         units.update({p.name: p.unit for p in candidate.parameters if p.unit})
     return units
 

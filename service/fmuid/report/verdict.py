@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from fmuid.profiling.intervals import NOISE_PREFIX
 from fmuid.profiling.result import IDENTIFIABLE, ParameterProfile, ProfileQuality, ProfileResult
 
 _QUALITY_WORDS = (
@@ -28,7 +29,11 @@ def quality_text(quality: ProfileQuality) -> str:
 def _open_ends(p: ParameterProfile) -> str:
     lo, hi = p.ci_simultaneous
     ends = [side for side, end in (("lower", lo), ("upper", hi)) if end is None]
-    return f"no {' and no '.join(ends)} end" if ends else "flat profile"
+    if ends:
+        return f"no {' and no '.join(ends)} end"
+    if p.status_reason.startswith(NOISE_PREFIX):
+        return "ends the FMU's solver noise could move"
+    return "flat profile"
 
 
 def profile_verdict(result: ProfileResult) -> list[str]:

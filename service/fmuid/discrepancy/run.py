@@ -1,0 +1,147 @@
+"""The state of one diagnosis and its scan rounds: options, progress, simulations spent."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fmuid.discrepancy import decide
+from fmuid.discrepancy.effects import Effect
+from fmuid.discrepancy.knowledge import AddedParameter
+from fmuid.discrepancy.result import AddedEstimate, CandidateScore
+from fmuid.discrepancy.scan import CandidateFit, Scanner, scan
+from fmuid.estimation.optimize import jacobian, make_fit_result, refine
+from fmuid.estimation.problem import Problem
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.profiling.engine import profile_problem
+from fmuid.profiling.result import ProfileResult
+from fmuid.progress import Progress, ProgressCallback
+
+if TYPE_CHECKING:
+    from fmuid.discrepancy.engine import DiagnoseOptions
+
+log = logging.getLogger(__name__)
+
+
+def fit_of(problem: Problem, z: np.ndarray, chi2: float, t0: float) -> FitResult:
+    """Return a fit result at ``z`` (its Jacobian computed here)."""
+    return make_fit_result(problem, z, chi2, jacobian(problem, z), "", False, t0, 0)
+
+
+def score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
+    """Return a scored candidate's summary for the result."""
+    return CandidateScore(
+        f.candidate.effect, f.values, f.chi2, f.p_value, f.bic, f.stage, f.statistic,
+        p_adjusted, f.fitted,
+    )  # fmt: skip
+
+
+def added_estimates(
+    prof: ProfileResult, added: Sequence[AddedParameter], confidence: float
+) -> dict[str, AddedEstimate]:
+    """Estimates, intervals and off-value checks of the added parameters from their profiles."""
+    return {
+        p.name: AddedEstimate.of(
+            prof.fit.estimates[p.name], p, prof.parameters[p.name].ci_pointwise, confidence
+        )
+        for p in added
+    }
+
+
+class Run:
+    """State of one diagnosis: the problem, options, progress and the simulations spent."""
+
+    def __init__(self, problem: Problem, opts: DiagnoseOptions, progress: ProgressCallback | None):
+        self.problem = problem
+        self.opts = opts
+        self.progress = progress
+        self.t0 = time.perf_counter()
+        self.sims0 = problem.simulations
+        self.made: dict[int, Problem] = {}
+        self.extra = 0
+        self.done = 0
+        self.total = 1
+
+    def spent(self) -> int:
+        """Return the simulations spent so far, in every problem made."""
+        made = sum(p.simulations for p in self.made.values())
+        return self.problem.simulations - self.sims0 + made + self.extra
+
+    def report(self, detail: str) -> None:
+        """Count a stage done and tell the progress callback."""
+        self.done += 1
+        if self.progress:
+            self.progress(Progress("diagnose", self.done, max(self.total, self.done), detail))
+
+    def scan_round(
+        self, scanner: Scanner, pool: list[Effect], stage: int
+    ) -> tuple[list[CandidateFit], list[float]]:
+        """Scan a pool of candidates on a scanner; return the fits and min-P adjusted p."""
+
+        def seen(f: CandidateFit) -> None:
+            self.made[id(f.problem)] = f.problem
+            self.report(f"round {stage}: {f.candidate.label} chi2 {f.chi2:.4g}")
+
+        fits = scan(
+            scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
+            options=self.opts.fit, stage=stage, on_candidate=seen,
+        )  # fmt: skip
+        return fits, decide.min_p(fits, self.problem.spec.seed + stage)
+
+    def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
+        """Count a profile: its problem's simulations, and those of worker processes."""
+        self.made[id(problem)] = problem
+        if self.opts.workers != 1:
+            self.extra += spent_elsewhere
+
+    def cost(self) -> Cost:
+        """Return the simulations and seconds spent."""
+        return Cost(self.spent(), time.perf_counter() - self.t0)
+
+
+def tie_intervals(run: Run, tie: CandidateFit) -> dict[str, object]:
+    """Profile-likelihood intervals of an equally good candidate's added parameters."""
+    tie_fit = fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
+    prof = profile_problem(
+        tie.problem,
+        tie_fit,
+        only=list(tie.candidate.names),
+        workers=run.opts.workers,
+        options=run.opts.walk,
+        confidence=run.opts.ci_confidence,
+    )
+    run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
+    estimates = added_estimates(prof, tie.candidate.parameters, run.opts.ci_confidence)
+    return {name: e.to_dict() for name, e in estimates.items()}
+
+
+def recheck_base(run: Run, fit: FitResult, best: CandidateFit) -> FitResult | None:
+    """Re-fit the base model from the best candidate's base parameters; a lower chi2 wins."""
+    names = run.problem.names
+    start = run.problem.to_z({n: best.problem.from_z(best.z)[n] for n in names})
+    z, chi2, _ = refine(run.problem, start, options=run.opts.fit)
+    if chi2 < fit.chi2 - 1e-6 * max(1.0, fit.chi2):
+        log.info("base fit improved from %.6g to %.6g by a candidate's start", fit.chi2, chi2)
+        return fit_of(run.problem, z, chi2, time.perf_counter())
+    return None
+
+
+def scan_base(
+    run: Run, fit: FitResult, cands: list[Effect]
+) -> tuple[FitResult, Scanner, list[CandidateFit], list[float]]:
+    """Scan the catalogue on the base fit (once more if a candidate revealed a better base)."""
+    for _ in range(2):
+        scanner = Scanner(run.problem, fit.z_estimate(), fit.jacobian)
+        fits, adjusted = run.scan_round(scanner, cands, 1)
+        best = fits[0]
+        if not best.fitted or best.p_value >= run.opts.screen_level:
+            break
+        better = recheck_base(run, fit, best)
+        if better is None:
+            break
+        fit = better
+    return fit, scanner, fits, adjusted
