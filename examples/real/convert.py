@@ -11,13 +11,9 @@ column per FMU variable, so this script renames them and cuts the official split
   ``emps_test.csv``.
 
 Each file's time starts at 0 (the FMUs start at rest at the first sample; the specs' ``settle``
-window leaves the start-up out). ``--substeps N`` adds N - 1 input-only rows (output cells
-empty, the input linear between the samples) inside every Silverbox sample interval: the
-built-in FMUs take one Runge-Kutta step per row interval up to 4 ms, which at Silverbox's
-1.64 ms and 68 Hz resonance costs about 1.7 mV of simulation error (``--substeps 2`` brings it
-within about 0.1 mV of a converged solution, at twice the cost). Usage::
+window leaves the start-up out). Usage::
 
-    python examples/real/convert.py OUT_DIR [--real /work/shared/real] [--substeps N]
+    python examples/real/convert.py OUT_DIR [--real /work/shared/real]
 """
 
 from __future__ import annotations
@@ -52,38 +48,20 @@ def read_columns(path: Path) -> dict[str, np.ndarray]:
 
 
 def write_columns(path: Path, columns: dict[str, np.ndarray]) -> None:
-    """Write equally long columns as a CSV file with a header row; NaN becomes an empty cell."""
+    """Write equally long columns as a CSV file with a header row."""
     table = np.column_stack(list(columns.values()))
-    with path.open("w", newline="") as stream:
-        writer = csv.writer(stream, lineterminator="\n")
-        writer.writerow(columns)
-        writer.writerows([[f"{v:.10g}" if v == v else "" for v in row] for row in table])
+    np.savetxt(path, table, delimiter=",", header=",".join(columns), comments="", fmt="%.10g")
     logger.info("wrote %s (%d rows)", path, table.shape[0])
 
 
-def with_substeps(
-    time: np.ndarray, inputs: dict[str, np.ndarray], outputs: dict[str, np.ndarray], n: int
-) -> dict[str, np.ndarray]:
-    """Add ``n - 1`` rows inside every sample interval: inputs linear, outputs empty."""
-    fine = np.concatenate(
-        [time[:-1, None] + np.diff(time)[:, None] * np.arange(n) / n, time[-1:, None]], axis=None
-    )
-    columns = {"time": fine, **{k: np.interp(fine, time, v) for k, v in inputs.items()}}
-    for name, values in outputs.items():
-        column = np.full(fine.size, np.nan)
-        column[::n] = values
-        columns[name] = column
-    return columns
-
-
-def convert(real: Path, out: Path, substeps: int = 1) -> None:
+def convert(real: Path, out: Path) -> None:
     """Write every file of the module's docstring from the benchmarks in ``real`` into ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     silverbox = read_columns(real / "silverbox" / "silverbox_SNLS80mV.csv")
     for name, (first, last) in SILVERBOX_SETS.items():
         time = silverbox["time"][first:last]
-        inputs, outputs = {"f": silverbox["u"][first:last]}, {"x": silverbox["y"][first:last]}
-        write_columns(out / name, with_substeps(time - time[0], inputs, outputs, substeps))
+        columns = {"f": silverbox["u"][first:last], "x": silverbox["y"][first:last]}
+        write_columns(out / name, {"time": time - time[0], **columns})
     for name, source in EMPS_SETS.items():
         emps = read_columns(real / "emps" / source)
         columns = {"q_ref": emps["q_ref"], "qm": emps["y"], "vir": emps["u"]}
@@ -97,12 +75,9 @@ def main() -> None:
     parser.add_argument(
         "--real", type=Path, default=Path("/work/shared/real"), help="the benchmarks' folder"
     )
-    parser.add_argument(
-        "--substeps", type=int, default=1, help="rows per Silverbox sample interval (default 1)"
-    )
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    convert(args.real, args.out, max(args.substeps, 1))
+    convert(args.real, args.out)
 
 
 if __name__ == "__main__":
