@@ -85,7 +85,8 @@ def _f_test(r: np.ndarray, base: np.ndarray, extra: np.ndarray) -> tuple[float, 
 
 def _amplitude(parts: Sequence[ResidualSeries]) -> tuple[float, float]:
     """Return the one-sided p-value and R^2 of the residual's window RMS against the output's."""
-    y_rms, r_rms = [], []
+    y_rms: list[np.ndarray] = []
+    r_rms: list[np.ndarray] = []
     for s in parts:
         width = max(8, len(s.model) // WINDOWS)
         n = len(s.model) // width
@@ -94,7 +95,7 @@ def _amplitude(parts: Sequence[ResidualSeries]) -> tuple[float, float]:
         for x, out in ((s.model, y_rms), (s.weighted, r_rms)):
             blocks = (x - np.mean(x))[: n * width].reshape(n, width)
             out.append(np.sqrt(np.mean(blocks**2, axis=1)))
-    if not y_rms or sum(len(v) for v in y_rms) < 5:
+    if sum(v.size for v in y_rms) < 5:
         return 1.0, 0.0
     fit = stats.linregress(np.concatenate(y_rms), np.concatenate(r_rms))
     if not np.isfinite(fit.pvalue):
