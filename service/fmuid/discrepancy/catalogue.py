@@ -16,14 +16,15 @@ output_lag             tau_outputs, tau_<output>   as the input lag
 output_gain, bias      gain_<output>, bias_<...>   0.5 to 2; +-half the output's magnitude
 output_saturation      max_<output>, min_<output>  from the median to past the data's extreme
 feedback_polynomial    c<k>_<output>_<input>       k = 2, 3: +-4 u / y^k (u, y: magnitudes)
-feedback_friction      coulomb_<rate>_<input>      +-u; smooth sign over 2 % of the rate
+feedback_friction      coulomb_<rate>_<input>      +-4 u; smooth sign over 2 % of the rate
 =====================  ==========================  ===========================================
 
 Threshold effects (dead zone, saturations) have no sensitivity at their off level: their screen
 probes levels inside the range the signals reach (quantiles of the data), not the off level.
 Feedback goes into every real input of a co-simulation FMU, driven by the data or not (an
-undriven input is where an FMU lets a force act from outside); its rate is an output whose unit
-is the level's per second, else the finite difference of the level.
+undriven input is where an FMU lets a force act from outside; its size, which the data cannot
+give, is the constant whose effect on the outputs matches the base fit's misfit); its rate is an
+output whose unit is the level's per second, else the finite difference of the level.
 """
 
 from __future__ import annotations
@@ -37,7 +38,9 @@ import numpy as np
 from fmuid.data import ParameterSpec
 from fmuid.discrepancy import effects as fx
 from fmuid.discrepancy.knowledge import AddedParameter, ModelKnowledge, model_knowledge
+from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
+from fmuid.model.registry import get_simulator
 
 POWERS = (2, 3)
 """Powers of the polynomial feedback candidates (the linear term is the model's own)."""
@@ -64,6 +67,9 @@ class Signals:
         Largest magnitude of each rate a friction term may use, by source name.
     interval, record
         Median sample interval and longest record [s].
+    undriven
+        Size of each FMU input the data do not drive: the constant value whose effect on the
+        outputs matches the base fit's misfit (:func:`undriven_sizes`).
 
     """
 
@@ -72,9 +78,12 @@ class Signals:
     rates: Mapping[str, float]
     interval: float
     record: float
+    undriven: Mapping[str, float]
 
     def size(self, name: str) -> float:
-        """Largest magnitude of an input or output in the data (1 when it is not driven)."""
+        """Return the largest magnitude of a signal in the data (an undriven input's size)."""
+        if name in self.undriven:
+            return self.undriven[name]
         values = self.inputs.get(name, self.outputs.get(name))
         if values is None or not values.size:
             return 1.0
@@ -177,7 +186,10 @@ def _output_effects(name: str, unit: str, s: Signals, w: fx.Words) -> list[fx.Ef
 def _feedback_effects(
     problem: Problem, s: Signals, w: fx.Words, rate_of: Mapping[str, tuple[str, bool]]
 ) -> list[fx.Effect]:
-    targets = [n for n, v in problem.model.inputs.items() if v.is_continuous]
+    targets = [
+        n for n, v in problem.model.inputs.items()
+        if v.is_continuous and (n in problem.inputs or n in s.undriven)
+    ]  # fmt: skip
     out: list[fx.Effect] = []
     for u in targets:
         u_size = s.size(u)
@@ -190,7 +202,7 @@ def _feedback_effects(
                 out.append(fx.FeedbackPolynomial(u, (p,), w, source=y, power=k))
         for source, (rate, derivative) in rate_of.items():
             width = FRICTION_WIDTH * s.rates.get(source, 1.0)
-            p = _nonlinear(f"coulomb_{rate}_{u}", w.unit(u), f"Coulomb friction on {u}", u_size)
+            p = _nonlinear(f"coulomb_{rate}_{u}", w.unit(u), f"Coulomb friction on {u}", 4 * u_size)
             out.append(
                 fx.FeedbackFriction(u, (p,), w, source=source, derivative=derivative, width=width)
             )
@@ -250,7 +262,46 @@ def signals(
         problem.simulations += 1
         sizes[source] = float(np.max(np.abs(y)))
     interval = float(np.median(gaps[gaps > 0])) if np.any(gaps > 0) else 1.0
-    return Signals(inputs, outputs, {k: max(v, 1e-12) for k, v in sizes.items()}, interval, record)
+    rate_sizes = {k: max(v, 1e-12) for k, v in sizes.items()}
+    undriven = undriven_sizes(problem, values)
+    return Signals(inputs, outputs, rate_sizes, interval, record, undriven)
+
+
+def undriven_sizes(problem: Problem, values: Mapping[str, float]) -> dict[str, float]:
+    """Return the size of each real FMU input the data do not drive, from the FMU's response.
+
+    The data say nothing of such an input's scale, so the first experiment is simulated with the
+    input held at 1 (its unit): the size is the base fit's RMS misfit over the RMS change of the
+    outputs, the largest over the outputs (the constant that would move the outputs as much as
+    the misfit does). An input that moves no output is left out (nothing can act through it).
+    """
+    undriven = [
+        n for n, v in problem.model.inputs.items() if v.is_continuous and n not in problem.inputs
+    ]
+    if not undriven or not isinstance(problem.predictor, FmuPredictor):
+        return {}
+    exp, mask, data = problem.experiments[0], problem.masks[0], problem.data[0]
+    base = problem.predictor.predict(values, exp, problem.outputs)
+    input_time, inputs = problem.predictor.inputs_of(exp)
+    params = {**problem.predictor.fixed, **values}
+    out = {}
+    for name in undriven:
+        pushed = get_simulator(problem.model).simulate(
+            params, input_time, {**inputs, name: np.ones(len(input_time))}, exp.time,
+            problem.outputs,
+        )  # fmt: skip
+        problem.simulations += 2
+        ratios = []
+        for j in range(len(problem.outputs)):
+            if mask[j].sum() < 2:
+                continue
+            misfit = float(np.sqrt(np.mean((data[j] - base[mask[j], j]) ** 2)))
+            moved = float(np.sqrt(np.mean((pushed[mask[j], j] - base[mask[j], j]) ** 2)))
+            if moved > 0 and np.isfinite(moved):
+                ratios.append(misfit / moved)
+        if ratios and max(ratios) > 0:
+            out[name] = max(ratios)
+    return out
 
 
 def catalogue(
