@@ -82,7 +82,12 @@ def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
 
 
 class ProgressWriter:
-    """Progress callback that writes to the store at most every ``interval`` seconds."""
+    """Progress callback that writes to the store at most every ``interval`` seconds.
+
+    Events of open-ended stages (``total`` 0: the trust-region refinement, whose evaluations are
+    not known ahead) are not written: the job's progress keeps its last counted stage, so that
+    ``done`` never exceeds ``total`` over HTTP.
+    """
 
     def __init__(self, store: JobStore, job_id: str, interval: float = PROGRESS_INTERVAL_S):
         self.store = store
@@ -92,6 +97,8 @@ class ProgressWriter:
 
     def __call__(self, event: Progress) -> None:
         """Record ``event`` unless one was recorded less than ``interval`` ago."""
+        if event.total <= 0:
+            return
         now = time.monotonic()
         if now - self._last >= self.interval or (event.total and event.done >= event.total):
             self._last = now
