@@ -38,6 +38,7 @@ from scipy import stats
 
 from fmuid.discrepancy.residual_tests import TestResult
 from fmuid.discrepancy.scan import CandidateFit
+from fmuid.readable import p_text
 
 SCAN_WEIGHT = 0.7
 """Share of the family-wise level given to the catalogue scan."""
@@ -246,9 +247,9 @@ def ties(best: CandidateFit, others: Sequence[CandidateFit]) -> list[Tie]:
 def strength(p: float) -> str:
     """Words for a p-value: how strong the evidence is."""
     if p < 1e-6:
-        return f"very strong evidence (p = {p:.2g})"
+        return f"very strong evidence ({p_text(p)})"
     if p < 1e-3:
-        return f"strong evidence (p = {p:.2g})"
+        return f"strong evidence ({p_text(p)})"
     if p < 0.01:
-        return f"evidence (p = {p:.2g})"
-    return f"weak evidence (p = {p:.2g})"
+        return f"evidence ({p_text(p)})"
+    return f"weak evidence ({p_text(p)})"

@@ -12,6 +12,7 @@ from fmuid.discrepancy.residual_tests import TestResult
 from fmuid.discrepancy.result import AddedEstimate, EffectStep
 from fmuid.discrepancy.settle import settles
 from fmuid.experiment_design.discriminate import Discrimination
+from fmuid.readable import p_text
 
 
 def _fmt_ci(e: AddedEstimate) -> str:
@@ -23,7 +24,7 @@ def _fmt_ci(e: AddedEstimate) -> str:
 
 def no_mismatch(alpha: float, scan_p: float | None) -> str:
     """Verdict when no test of the family rejects."""
-    scan = "" if scan_p is None else f" (best candidate, adjusted for the scan: p = {scan_p:.2g})"
+    scan = "" if scan_p is None else f" (best candidate, adjusted for the scan: {p_text(scan_p)})"
     return (
         "No mismatch: neither the residual tests, nor the agreement of the experiments, nor the "
         f"generic input-driven error model, nor any candidate of the catalogue{scan} rejects the "
@@ -54,7 +55,7 @@ def explained(
         lead = "" if len(steps) == 1 else f"step {k + 1}, "
         parts.append(
             f"{lead}{step.effect}: {step.description} ({name} {_fmt_ci(first)}; chi2 drop "
-            f"{drop:.4g}, p = {step.p_value:.2g})"
+            f"{drop:.4g}, {p_text(step.p_value)})"
         )
     out = "; ".join(parts)
     out = out[0].upper() + out[1:]
@@ -78,7 +79,7 @@ def explained(
     if rival:
         out += (
             f" An input-driven error model outside the catalogue ({rival['model']}) explains "
-            f"the data as well (Vuong p = {rival['p_value']:.2g}): the named effect may stand in "
+            f"the data as well (Vuong {p_text(rival['p_value'])}): the named effect may stand in "
             "for physics that the catalogue lacks."
         )
     return out
@@ -104,7 +105,7 @@ def levels(found: Mapping[str, Any]) -> str:
 def _tie(t: Tie, ties: Sequence[Tie]) -> str:
     """Return a tie's effect and test, with its parameter when another tie has the same effect."""
     c = t.fit.candidate
-    test = "equal predictions" if t.test == "equal_predictions" else f"Vuong p = {t.p_value:.2g}"
+    test = "equal predictions" if t.test == "equal_predictions" else f"Vuong {p_text(t.p_value)}"
     same = sum(u.fit.candidate.effect == c.effect for u in ties)
     return f"{c.effect} ({c.parameters[0].name}; {test})" if same > 1 else f"{c.effect} ({test})"
 
@@ -139,7 +140,7 @@ def unexplained(
     out = f"Mismatch in {place} that no catalogue entry removes"
     if best is not None:
         out += f": the best candidate, {best.effect} ({strength(best.p_value)})"
-        out += f", still leaves {worst.test} at p = {worst.p_value:.2g}" if worst else ""
+        out += f", still leaves {worst.test} at {p_text(worst.p_value)}" if worst else ""
     out += (
         f". A generic {correction['model']} reduces chi2 from {correction['chi2_before']:.4g} "
         f"to {correction['chi2_after']:.4g} (noise alone would leave about "

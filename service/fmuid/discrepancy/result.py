@@ -9,6 +9,7 @@ from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.residual_tests import TestResult, Window
 from fmuid.estimation.result import Cost
 from fmuid.provenance import Provenance, entry
+from fmuid.readable import p_text
 
 
 @dataclass(frozen=True)
@@ -324,7 +325,7 @@ def verdict(d: dict[str, Any]) -> str:
     named = [effect_of(e["effect"]) for e in d.get("effects") or []] or [effect_of(effect)]
     p = d.get("lrt_p_value")
     words = "evidence" if p is None else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else
-                                          "moderate") + f" evidence (p = {p:.2g})"  # fmt: skip
+                                          "moderate") + f" evidence ({p_text(p)})"  # fmt: skip
     what = ", then ".join(named)
     verb = "explains" if len(named) == 1 else "explain"
     if "unexplained" in ties:
