@@ -285,15 +285,20 @@ class JobStore:
         return [Job.from_row(r) for r in rows]
 
     @retried
-    def claim_next(self) -> Job | None:
-        """Mark the oldest queued job running (one more attempt) and return it, or ``None``."""
+    def claim_next(self, owner: int | None = None) -> Job | None:
+        """Mark the oldest queued job running (one more attempt) and return it, or ``None``.
+
+        With ``owner`` (a pid), only while that process holds the store's lease: a service that
+        lost it (:mod:`fmuid.jobs.restarts`) claims nothing, in the same transaction.
+        """
+        fence = "" if owner is None else " AND EXISTS (SELECT 1 FROM lease WHERE pid = ?)"
         with self.transaction() as conn:
             row = conn.execute(
                 "UPDATE jobs SET status = 'running', started = ?, attempts = attempts + 1,"
                 " error = NULL, progress_done = 0, progress_total = 0, progress_stage = ''"
                 " WHERE id = (SELECT id FROM jobs WHERE status = 'queued'"
-                " ORDER BY created, rowid LIMIT 1) RETURNING *",
-                (time.time(),),
+                f" ORDER BY created, rowid LIMIT 1){fence} RETURNING *",
+                (time.time(),) if owner is None else (time.time(), owner),
             ).fetchone()
         return Job.from_row(row) if row else None
 
