@@ -11,10 +11,10 @@ that outcome (a full disk), it tries again on every round until it can.
 One service owns a data folder: it holds an exclusive lock of the operating system on it for
 its whole life (:mod:`fmuid.jobs.owner`), so that a second one refuses to start, and a lease in
 the store, which every claim of a job checks; a service that finds its lease gone stops
-claiming, says so in health and exits. On start it takes the lock and the lease, kills every process left by
-the previous run of the same store, queues the interrupted jobs again and removes their leftover
-files. Every :data:`MAINTENANCE_S` it removes jobs past ``settings.retention_s`` and files no job
-owns.
+claiming, says so in health and exits. On start it takes the lock and the lease, kills every
+process left by the previous run of the same store, queues the interrupted jobs again and
+removes their leftover files. Every :data:`MAINTENANCE_S` it removes jobs past
+``settings.retention_s`` and files no job owns.
 """
 
 from __future__ import annotations
