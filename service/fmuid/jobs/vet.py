@@ -7,7 +7,9 @@ parse of uploaded bytes (spec, CSV files, a design's space, ``modelDescription.x
 probe of the FMU's binary happen here, never in the service, so that no upload can stall the
 service's other requests. The process lowers its CPU priority, limits its own address space
 and, per task, its CPU time; it leads its own session, so that the service can kill it and
-everything it started at once; and it ends when its parent does.
+everything it started at once; and it ends when its parent does. It is a child subreaper
+(:mod:`fmuid.jobs.reaper`): whatever a probed binary started, even in a session of its own, is
+re-parented to it when the probe ends, and killed after every task.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from fmuid.data import InputLimits, Spec, check_against_model, load_experiment, 
 from fmuid.data.limits import over_limit
 from fmuid.errors import FmuidError, SpecError
 from fmuid.jobs.fmucheck import FmuLimits, check_fmu
+from fmuid.jobs.reaper import become_subreaper, kill_tree, reap_children
 from fmuid.model.fmu import FmuModel
 
 logger = logging.getLogger(__name__)
@@ -155,6 +158,7 @@ def _watch_parent(parent: int) -> None:
     """End this process once the service that started it is gone."""
     while os.getppid() == parent:
         time.sleep(0.5)
+    kill_tree(os.getpid(), include_root=False)
     os._exit(1)
 
 
@@ -165,11 +169,15 @@ def main(argv: list[str]) -> int:
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
     answers = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever else writes to stdout (native code) goes to the log
+    if not become_subreaper():
+        logger.warning("not a child subreaper: a process a probed FMU detaches may outlive it")
     threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
     answers.write(READY + "\n")
     answers.flush()
     for line in sys.stdin:
         answer = _answer(VetTask(**json.loads(line)))
+        kill_tree(os.getpid(), include_root=False)  # what the probed binary left behind
+        reap_children()
         recycle = answer.pop("recycle", False) or _resident_mb() > RECYCLE_RSS_MB
         answers.write(json.dumps(answer) + "\n")
         answers.flush()

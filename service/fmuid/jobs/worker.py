@@ -33,7 +33,7 @@ from fmuid.jobs import restarts
 from fmuid.jobs.crash import exit_message
 from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmProcess, WarmServer
 from fmuid.jobs.owner import OwnerLock, StoreInUse
-from fmuid.jobs.proc import end_processes, find_job_processes, kill_group
+from fmuid.jobs.proc import end_job, end_processes, find_job_processes, kill_group
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.settings import Settings
 
@@ -155,7 +155,7 @@ class Supervisor:
             self._thread.join(timeout=10)
         with self._lock:
             for run in self._running.values():
-                kill_group(run.process.pid)
+                end_job(run.process.pid)
                 run.process.wait()
                 hk.remove_paths([self.layout.job_tmp(run.job.id)])
             self._running.clear()
@@ -175,7 +175,7 @@ class Supervisor:
         with self._lock:
             run = self._running.get(job_id)
         if run is not None:
-            kill_group(run.process.pid)
+            end_job(run.process.pid)
         self._wake.set()
 
     def _loop(self) -> None:
@@ -286,10 +286,10 @@ class Supervisor:
         for run in runs:
             current = self.store.get(run.job.id)
             if current is None or current.status == "cancelled":
-                kill_group(run.process.pid)
+                end_job(run.process.pid)
             elif time.monotonic() - run.started > limit:
                 self.store.fail(run.job.id, f"exceeded the time limit of {limit:g} s")
-                kill_group(run.process.pid)
+                end_job(run.process.pid)
 
     def _reap(self) -> None:
         with self._lock:
