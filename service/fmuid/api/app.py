@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import logging
+import signal
+import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
@@ -110,6 +112,9 @@ def serve(
 
     """
     settings = settings or Settings()
+    # uvicorn raises SIGTERM again after its graceful stop: exit normally then, so that the
+    # exit handlers run (multiprocessing removes its pymp-* folder from TMPDIR)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     host = host or settings.host
     port = settings.port if port is None else port
     if settings.api_token is None and host not in ("127.0.0.1", "localhost", "::1"):

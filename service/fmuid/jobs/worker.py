@@ -19,6 +19,7 @@ removes their leftover files. Every :data:`MAINTENANCE_S` it removes jobs past
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
@@ -32,6 +33,7 @@ from fmuid.jobs import housekeeping as hk
 from fmuid.jobs import restarts
 from fmuid.jobs.crash import exit_message
 from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmProcess, WarmServer
+from fmuid.jobs.layout import fit_own_tmp
 from fmuid.jobs.owner import OwnerLock, StoreInUse
 from fmuid.jobs.proc import end_job, end_processes, find_job_processes, kill_group
 from fmuid.jobs.store import Job, JobStore, StoreError
@@ -70,6 +72,8 @@ class Supervisor:
         self.store = store
         self.layout = store.layout
         self.layout.logs.mkdir(parents=True, exist_ok=True)
+        fit_own_tmp()  # and a TMPDIR too long for any socket path is refused here
+        self.layout.job_tmp_root.parent.mkdir(parents=True, exist_ok=True)
         self._running: dict[str, _Running] = {}
         self._lock = threading.Lock()
         self._wake = threading.Event()
@@ -159,6 +163,8 @@ class Supervisor:
                 run.process.wait()
                 hk.remove_paths([self.layout.job_tmp(run.job.id)])
             self._running.clear()
+        with contextlib.suppress(OSError):  # empty once the last job's folder is gone
+            self.layout.job_tmp_root.rmdir()
         try:
             if self._lost is None:
                 restarts.release_lease(self.store)
