@@ -163,8 +163,10 @@ class Supervisor:
                 run.process.wait()
                 hk.remove_paths([self.layout.job_tmp(run.job.id)])
             self._running.clear()
-        with contextlib.suppress(OSError):  # empty once the last job's folder is gone
-            self.layout.job_tmp_root.rmdir()
+        root = self.layout.job_tmp_root  # whatever a job or a drawing left there, then itself
+        hk.remove_paths(list(root.iterdir()) if root.is_dir() else [])
+        with contextlib.suppress(OSError):
+            root.rmdir()
         try:
             if self._lost is None:
                 restarts.release_lease(self.store)
@@ -263,6 +265,10 @@ class Supervisor:
             return
         self.store.set_pid(job.id, process.pid)
         with self._lock:
+            if self._stop.is_set():  # stop() gave up waiting for this thread: leave nothing
+                end_job(process.pid)
+                hk.remove_paths([tmp])
+                return
             self._running[job.id] = _Running(job, process, log_path)
         threading.Thread(target=self._wake_at_end, args=(process,), daemon=True).start()
         logger.info("job %s (%s) started in process %s", job.id, job.kind, process.pid)
