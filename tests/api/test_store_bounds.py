@@ -226,3 +226,13 @@ def test_the_owner_lock_keeps_a_second_service_out(tmp_path):
         OwnerLock(tmp_path, tmp_path / "jobs.sqlite").acquire()
     first.release()
     OwnerLock(tmp_path, tmp_path / "jobs.sqlite").acquire()
+
+
+def test_health_says_when_the_database_file_was_replaced(tmp_path):
+    make_store(tmp_path)
+    db = tmp_path / "jobs.sqlite"
+    checks = StoreHealth(db, tmp_path, min_free_bytes=0, disk_quota_bytes=0)
+    copy = tmp_path / "copy.sqlite"
+    copy.write_bytes(db.read_bytes())
+    os.replace(copy, db)
+    assert "removed or replaced" in checks.database_problems()[0]

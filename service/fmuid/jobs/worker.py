@@ -172,6 +172,10 @@ class Supervisor:
                 restarts.release_lease(self.store)
         except StoreError:
             logger.exception("could not release the lease of the job store")
+        try:
+            self.store.checkpoint()
+        except sqlite3.Error:
+            logger.exception("could not checkpoint the job store %s", self.settings.database)
         self._owner.release()
 
     def wake(self) -> None:
