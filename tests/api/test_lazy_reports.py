@@ -38,6 +38,7 @@ def test_concurrent_first_requests_draw_once(service, done_job):
         answers = list(pool.map(lambda _: httpx.get(url, timeout=120), range(6)))
     assert [a.status_code for a in answers] == [200] * 6, [a.text[:200] for a in answers]
     assert len({a.text for a in answers}) == 1 and "<html" in answers[0].text.lower()
+    assert "default-src 'none'" in answers[0].headers["content-security-policy"]
     assert drawings(service, done_job) == 1
     images = sorted(p.name for p in (service.data_dir / "reports" / done_job).glob("*.png"))
     assert images

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import resource
 import sys
 import threading
@@ -84,6 +85,37 @@ class VetTask:
         return json.dumps(asdict(self))
 
 
+MAX_NUMBER_CHARS = 100
+"""Longest number accepted in a spec or a space (Python's int parser stops at 4,300 digits)."""
+_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+_NUMBER = re.compile(rf"[0-9eE.+-]{{{MAX_NUMBER_CHARS + 1},}}")
+_BRACKET = re.compile(r"[\[\]{}]")
+
+
+def check_json_shape(text: str, name: str, limits: InputLimits) -> None:
+    """Refuse JSON with a number too long or nesting too deep, before any parser sees it.
+
+    Raises
+    ------
+    SpecError
+        Naming the field (``spec`` or ``space``) and the limit.
+
+    """
+    bare = _STRING.sub('""', text)
+    long = _NUMBER.search(bare)
+    if long:
+        raise SpecError(
+            f"{name}: a number of {len(long[0])} characters, more than the limit of"
+            f" {MAX_NUMBER_CHARS}"
+        )
+    depth = 0
+    for bracket in _BRACKET.finditer(bare):
+        depth += 1 if bracket[0] in "[{" else -1
+        if depth > limits.max_spec_depth:
+            what = over_limit("nested arrays and objects", "max_spec_depth", limits)
+            raise SpecError(f"{name}: {what}")
+
+
 def vet(task: VetTask) -> dict[str, Any]:
     """Check the spec, the FMU, each CSV file (or a design's space) and how they fit together.
 
@@ -97,9 +129,9 @@ def vet(task: VetTask) -> dict[str, Any]:
     workdir = Path(task.workdir)
     input_limits = InputLimits(**task.input_limits)
     try:
-        spec = spec_from_json(
-            (workdir / "spec.json").read_text(encoding="utf-8"), "spec", input_limits
-        )
+        text = (workdir / "spec.json").read_text(encoding="utf-8")
+        check_json_shape(text, "spec", input_limits)
+        spec = spec_from_json(text, "spec", input_limits)
         fmu_path = workdir / task.fmu_file
         if task.fmu_name is None:
             model = FmuModel(fmu_path)
@@ -130,7 +162,9 @@ def _check_design(path: Path, spec: Spec, model: FmuModel, limits: InputLimits) 
 
     if path.stat().st_size > limits.max_spec_bytes:
         raise SpecError(f"space: {over_limit('bytes', 'max_spec_bytes', limits)}")
-    check_design(space_from_json(path.read_text(errors="replace"), "space"), spec, model)
+    text = path.read_text(errors="replace")
+    check_json_shape(text, "space", limits)
+    check_design(space_from_json(text, "space"), spec, model)
 
 
 def _answer(task: VetTask) -> dict[str, Any]:
