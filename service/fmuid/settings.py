@@ -97,6 +97,11 @@ class Settings(BaseSettings):
         process (and every process it started) is killed past either.
     check_wait_s
         How long a submission waits for a free checking process before it gets 503 [s].
+    draw_workers
+        Reports drawn at the same time, each in its own process; further first requests of
+        reports wait for a turn without holding a thread of the other routes.
+    draw_memory_mb
+        Address-space limit of one drawing process [MiB].
 
     """
 
@@ -134,6 +139,8 @@ class Settings(BaseSettings):
     check_timeout_s: float = Field(default=60.0, gt=0)
     check_memory_mb: int = Field(default=2048, ge=256)
     check_wait_s: float = Field(default=120.0, gt=0)
+    draw_workers: int = Field(default=2, ge=1)
+    draw_memory_mb: int = Field(default=2048, ge=256)
 
     @model_validator(mode="after")
     def _resolve_paths(self) -> Settings:
