@@ -13,6 +13,7 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 
 from fmuid.api.auth import BearerAuth
+from fmuid.api.connections import connection_limit, protocol, raise_open_files
 from fmuid.api.drawing import ReportDrawer
 from fmuid.api.failures import add_failure_handlers
 from fmuid.api.limits import BodyLimit
@@ -121,4 +122,14 @@ def serve(
         logger.warning(
             "listening on %s without FMUID_API_TOKEN: anyone who reaches it can run code", host
         )
-    uvicorn.run(create_app(settings), host=host, port=port, log_level="info")
+    open_files = raise_open_files()
+    config = uvicorn.Config(
+        create_app(settings),
+        host=host,
+        port=port,
+        log_level="info",
+        http=protocol(settings.header_timeout_s),
+        limit_concurrency=connection_limit(settings.max_connections, open_files),
+        timeout_keep_alive=settings.keep_alive_s,
+    )
+    uvicorn.Server(config).run()
