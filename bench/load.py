@@ -9,7 +9,9 @@ Starts ``python -m fmuid.api`` on a free loopback port with a fresh data folder,
 2. submits 2 heavy jobs (``msd`` profiles with a global search) and polls their status for
    ``--heavy-s`` seconds while they run: p50/p99/max status latency, then cancels them;
 3. posts ``--uploads`` bodies of 45 MB (refused: they are no FMU) while health is polled:
-   p99/max health latency during the uploads.
+   p99/max health latency during the uploads;
+4. asks for the report of every small job at once (each one's first request: a drawing each)
+   while status is polled: p50/p99/max status latency, the answers and how long all took.
 
 The load of the machine (``/proc/loadavg``) before and after is printed with the table.
 
@@ -92,9 +94,10 @@ def main() -> None:
         write_csv(csv)
         proc, url = start_service(data_dir, args.workers)
         try:
-            rows = small_jobs(url, csv, args.jobs, args.workers)
+            rows, ids = small_jobs(url, csv, args.jobs, args.workers)
             rows += heavy_jobs(url, csv, args.heavy_s)
             rows += uploads(url, csv, args.uploads)
+            rows += first_reports(url, ids)
         finally:
             proc.terminate()
             proc.wait()
@@ -191,7 +194,27 @@ def uploads(url: str, csv: Path, n: int) -> list[tuple[str, str]]:
     ]
 
 
-def small_jobs(url: str, csv: Path, n_jobs: int, workers: int) -> list[tuple[str, str]]:
+def first_reports(url: str, ids: list[str]) -> list[tuple[str, str]]:
+    """Status latency while the first report of every job in ``ids`` is asked for at once."""
+
+    def report(job: str) -> int:
+        return httpx.get(f"{url}/v1/jobs/{job}/report", timeout=900).status_code
+
+    t0 = time.monotonic()
+    with Poller(url, lambda i: f"/v1/jobs/{ids[i % len(ids)]}") as poller:
+        with ThreadPoolExecutor(len(ids)) as pool:
+            codes = list(pool.map(report, ids))
+    wall = time.monotonic() - t0
+    answers = " ".join(f"{code} x{codes.count(code)}" for code in sorted(set(codes)))
+    return [
+        poller.row(f"status latency, {len(ids)} first report requests,"),
+        ("report answers / time for all [s]", f"{answers} / {wall:.1f}"),
+    ]
+
+
+def small_jobs(
+    url: str, csv: Path, n_jobs: int, workers: int
+) -> tuple[list[tuple[str, str]], list[str]]:
     content = csv.read_bytes()
 
     def submit(_: int) -> str:
@@ -257,7 +280,7 @@ def small_jobs(url: str, csv: Path, n_jobs: int, workers: int) -> list[tuple[str
         ("workers", f"{workers}"),
         ("worker utilisation", f"{busy / (workers * wall):.0%}"),
     ]
-    return rows
+    return rows, [s["id"] for s in final if s["status"] == "done"]
 
 
 if __name__ == "__main__":

@@ -97,6 +97,19 @@ class Settings(BaseSettings):
         process (and every process it started) is killed past either.
     check_wait_s
         How long a submission waits for a free checking process before it gets 503 [s].
+    draw_workers
+        Reports drawn at the same time, each in its own process; further first requests of
+        reports wait for a turn without holding a thread of the other routes.
+    draw_memory_mb
+        Address-space limit of one drawing process [MiB].
+    max_connections
+        Connections ``fmuid serve`` holds at once (uvicorn's ``limit_concurrency``); requests
+        beyond get 503. Lowered to fit the open-file limit (:mod:`fmuid.api.connections`).
+    header_timeout_s
+        A connection whose request head is not complete this long after it opened (or after
+        its last response) is closed [s] (slowloris).
+    keep_alive_s
+        An idle kept-alive connection is closed after this long [s].
 
     """
 
@@ -134,6 +147,11 @@ class Settings(BaseSettings):
     check_timeout_s: float = Field(default=60.0, gt=0)
     check_memory_mb: int = Field(default=2048, ge=256)
     check_wait_s: float = Field(default=120.0, gt=0)
+    draw_workers: int = Field(default=2, ge=1)
+    draw_memory_mb: int = Field(default=2048, ge=256)
+    max_connections: int = Field(default=4096, ge=16)
+    header_timeout_s: float = Field(default=10.0, gt=0)
+    keep_alive_s: int = Field(default=5, ge=1)
 
     @model_validator(mode="after")
     def _resolve_paths(self) -> Settings:

@@ -1,5 +1,6 @@
 """The data folder's layout: the paths an existing data folder holds stay where they are."""
 
+import tempfile
 from pathlib import Path
 
 from fmuid.jobs.layout import DataLayout
@@ -22,10 +23,19 @@ def test_paths_of_a_data_folder(tmp_path):
 def test_job_temporary_folders_are_short_and_per_data_folder(tmp_path):
     one, other = DataLayout(tmp_path / "a"), DataLayout(tmp_path / "b")
     assert one.job_tmp_root != other.job_tmp_root
-    assert one.job_tmp("j1") == one.job_tmp_root / "j1"
-    assert one.report_work("j1") == one.job_tmp_root / "j1.report"
-    socket = one.job_tmp("0" * 36) / "pymp-xxxxxxxx" / "listener-xxxxxxxx"
+    job = "0123abcd-4567-89ef-0123-456789abcdef"
+    assert one.job_tmp(job) == one.job_tmp_root / "0123abcd4567"
+    assert one.report_work(job) == one.job_tmp_root / "0123abcd4567.r"
+    socket = one.report_work(job) / "pymp-xxxxxxxx" / "listener-xxxxxxxx"
     assert len(str(socket).encode()) < 108  # a Unix socket path's limit
+
+
+def test_a_long_tmpdir_falls_back_to_a_short_one(tmp_path, monkeypatch):
+    long = tmp_path / ("t" * 80)
+    long.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(long))
+    socket = DataLayout(tmp_path).job_tmp("0" * 36) / "pymp-xxxxxxxx" / "listener-xxxxxxxx"
+    assert len(str(socket).encode()) < 108 and not socket.is_relative_to(long)
 
 
 def test_a_job_owns_every_per_job_path_and_no_shared_one(tmp_path):

@@ -9,12 +9,14 @@ the cause and leaves the job ``done`` with its result.
 from __future__ import annotations
 
 import sqlite3
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import httpx
 import pytest
 
 from api_helpers import msd_spec
+from fmuid.api.drawing import RETRY_AFTER_S
 
 DRAWING_LINE = "drawing the report of job"
 
@@ -38,6 +40,7 @@ def test_concurrent_first_requests_draw_once(service, done_job):
         answers = list(pool.map(lambda _: httpx.get(url, timeout=120), range(6)))
     assert [a.status_code for a in answers] == [200] * 6, [a.text[:200] for a in answers]
     assert len({a.text for a in answers}) == 1 and "<html" in answers[0].text.lower()
+    assert "default-src 'none'" in answers[0].headers["content-security-policy"]
     assert drawings(service, done_job) == 1
     images = sorted(p.name for p in (service.data_dir / "reports" / done_job).glob("*.png"))
     assert images
@@ -53,8 +56,9 @@ def test_first_request_of_a_file_draws_the_report(service, done_job):
     assert drawings(service, done_job) == 1
 
 
-def test_a_failed_drawing_names_the_cause_and_keeps_the_job(service, done_job):
+def test_a_failed_drawing_names_the_cause_and_is_tried_again(service, done_job):
     with sqlite3.connect(service.data_dir / "jobs.sqlite") as db:
+        (result,) = db.execute("SELECT json FROM results WHERE job_id = ?", (done_job,)).fetchone()
         db.execute("UPDATE results SET json = '{\"chi2\": 1.0}' WHERE job_id = ?", (done_job,))
     url = f"{service.url}/v1/jobs/{done_job}/report"
     answer = httpx.get(url, timeout=120)
@@ -64,5 +68,11 @@ def test_a_failed_drawing_names_the_cause_and_keeps_the_job(service, done_job):
     assert "SpecError: not an fmuid result" in detail, detail
     status = httpx.get(f"{service.url}/v1/jobs/{done_job}", timeout=10).json()
     assert status["status"] == "done" and status["error"] is None
-    assert httpx.get(url, timeout=60).json()["detail"] == detail  # the cause stays; no redraw
+    assert httpx.get(url, timeout=60).json()["detail"] == detail  # the cause stays a moment
     assert drawings(service, done_job) == 1
+    with sqlite3.connect(service.data_dir / "jobs.sqlite") as db:  # the cause has passed
+        db.execute("UPDATE results SET json = ? WHERE job_id = ?", (result, done_job))
+    time.sleep(RETRY_AFTER_S + 0.5)
+    answer = httpx.get(url, timeout=120)
+    assert answer.status_code == 200 and "<html" in answer.text.lower(), answer.text
+    assert drawings(service, done_job) == 2

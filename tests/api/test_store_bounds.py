@@ -15,6 +15,7 @@ from fmuid.jobs import restarts
 from fmuid.jobs.crash import FMI_VERSION_LINE, fmi_call_in_traceback
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.layout import DataLayout
+from fmuid.jobs.owner import OwnerLock, StoreInUse
 from fmuid.jobs.store import Dataset, JobStore, QueueFull, StoreError
 
 
@@ -203,3 +204,35 @@ def test_crash_messages_name_the_fmi_function_of_the_fmus_version(version, modul
         f'  File "/x/fmpy/{module}.py", line 20 in doStep\n'
     )
     assert fmi_call_in_traceback(log) == expected
+
+
+def test_a_service_that_lost_its_lease_claims_nothing(tmp_path, monkeypatch):
+    store = make_store(tmp_path)
+    store.create("fit", "{}", "0" * 64, "m", [])
+    restarts.take_lease(store)
+    monkeypatch.setattr(os, "getpid", lambda: 2**22 + 1)  # a second service took it over
+    with store.transaction() as conn:
+        conn.execute("UPDATE lease SET pid = ?", (os.getpid(),))
+    monkeypatch.undo()
+    assert not restarts.renew_lease(store)
+    assert store.claim_next(owner=os.getpid()) is None
+    assert store.claim_next(owner=2**22 + 1) is not None
+
+
+def test_the_owner_lock_keeps_a_second_service_out(tmp_path):
+    first = OwnerLock(tmp_path, tmp_path / "jobs.sqlite")
+    first.acquire()
+    with pytest.raises(StoreInUse, match=f"process {os.getpid()} holds"):
+        OwnerLock(tmp_path, tmp_path / "jobs.sqlite").acquire()
+    first.release()
+    OwnerLock(tmp_path, tmp_path / "jobs.sqlite").acquire()
+
+
+def test_health_says_when_the_database_file_was_replaced(tmp_path):
+    make_store(tmp_path)
+    db = tmp_path / "jobs.sqlite"
+    checks = StoreHealth(db, tmp_path, min_free_bytes=0, disk_quota_bytes=0)
+    copy = tmp_path / "copy.sqlite"
+    copy.write_bytes(db.read_bytes())
+    os.replace(copy, db)
+    assert "removed or replaced" in checks.database_problems()[0]

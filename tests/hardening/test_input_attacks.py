@@ -90,6 +90,11 @@ CASES = {
     "20k-columns": (SPEC, wide_csv(20_000), "limit of 1000 columns (FMUID_MAX_CSV_COLUMNS)"),
     "20k-keys": (many_keys_spec(20_000), GOOD_CSV, "limit of 10000 keys (FMUID_MAX_SPEC_KEYS)"),
     "deep-nesting": (deep_spec(100_000), GOOD_CSV, "nested arrays and objects (FMUID_MAX_SPEC"),
+    "5000-digit-number": (
+        SPEC.replace('"start": 1.1', '"start": 1' + "1" * 4999),
+        GOOD_CSV,
+        "spec: a number of 5000 characters, more than the limit of 100",
+    ),
 }
 
 

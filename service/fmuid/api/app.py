@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import logging
+import signal
+import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
@@ -11,6 +13,7 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 
 from fmuid.api.auth import BearerAuth
+from fmuid.api.connections import connection_limit, protocol, raise_open_files
 from fmuid.api.drawing import ReportDrawer
 from fmuid.api.failures import add_failure_handlers
 from fmuid.api.limits import BodyLimit
@@ -110,10 +113,23 @@ def serve(
 
     """
     settings = settings or Settings()
+    # uvicorn raises SIGTERM again after its graceful stop: exit normally then, so that the
+    # exit handlers run (multiprocessing removes its pymp-* folder from TMPDIR)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     host = host or settings.host
     port = settings.port if port is None else port
     if settings.api_token is None and host not in ("127.0.0.1", "localhost", "::1"):
         logger.warning(
             "listening on %s without FMUID_API_TOKEN: anyone who reaches it can run code", host
         )
-    uvicorn.run(create_app(settings), host=host, port=port, log_level="info")
+    open_files = raise_open_files()
+    config = uvicorn.Config(
+        create_app(settings),
+        host=host,
+        port=port,
+        log_level="info",
+        http=protocol(settings.header_timeout_s),
+        limit_concurrency=connection_limit(settings.max_connections, open_files),
+        timeout_keep_alive=settings.keep_alive_s,
+    )
+    uvicorn.Server(config).run()

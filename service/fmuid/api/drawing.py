@@ -5,8 +5,12 @@ keyed by job id, so that concurrent first requests wait for the same drawing); t
 the on-disk marker ``reports/<id>.tmp`` (a ``mkdir``, which only one caller wins, so even two
 services on one store never draw twice at once) and, in a thread, forks a drawing process from
 the warm server (:func:`fmuid.jobs.draw.draw_job_report`) and waits for it, killing it past
-:data:`DRAW_TIMEOUT_S`. A drawing that fails leaves ``reports/<id>.error`` with the reason,
-which later requests answer with; the job itself is never touched.
+:data:`DRAW_TIMEOUT_S`. At most ``settings.draw_workers`` drawings run at once, on a limiter of
+their own (the other routes' threads stay free: a crowd of first requests cannot stall status
+polls), each within ``settings.draw_memory_mb``. A drawing that fails leaves
+``reports/<id>.error`` with the reason, which requests answer with; the first request after
+:data:`RETRY_AFTER_S` draws again (the cause may have been passing: memory, a full disk). The job
+itself is never touched.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import signal
 import time
 from pathlib import Path
 
+import anyio
 import anyio.to_thread
 
 from fmuid.jobs.draw import forked_drawing
@@ -33,6 +38,8 @@ logger = logging.getLogger(__name__)
 DRAW_TIMEOUT_S = 600.0
 """Longest drawing of one report [s]; its process is killed past it."""
 MARKER_POLL_S = 0.1
+RETRY_AFTER_S = 5.0
+"""A failed drawing is answered with its cause for this long [s]; the next request draws again."""
 
 
 class DrawingFailed(Exception):
@@ -56,6 +63,7 @@ class ReportDrawer:
         self.warm = warm
         self.layout = DataLayout(settings.data_dir)
         self._drawing: dict[str, asyncio.Task[str | None]] = {}
+        self._limiter: anyio.CapacityLimiter | None = None
 
     async def report_dir(self, job_id: str) -> Path:
         """Return the folder of the report of done job ``job_id``, drawing it first if needed.
@@ -67,10 +75,15 @@ class ReportDrawer:
 
         """
         directory, error = self.layout.report(job_id), self.layout.report_error(job_id)
+        if self._limiter is None:  # made in the event loop, on the first request
+            self._limiter = anyio.CapacityLimiter(self.settings.draw_workers)
+        if _older_than(error, RETRY_AFTER_S):
+            remove_paths([error])
         if not (directory / "index.html").is_file() and not error.is_file():
             task = self._drawing.get(job_id)
             if task is None:
-                task = asyncio.ensure_future(anyio.to_thread.run_sync(self._draw, job_id))
+                drawing = anyio.to_thread.run_sync(self._draw, job_id, limiter=self._limiter)
+                task = asyncio.ensure_future(drawing)
                 self._drawing[job_id] = task
                 task.add_done_callback(lambda _: self._drawing.pop(job_id, None))
             reason = await asyncio.shield(task)
@@ -124,9 +137,17 @@ class ReportDrawer:
 
     def _arguments(self, job_id: str) -> tuple[Path, Path, str, int]:
         s = self.settings
-        return (s.database, s.data_dir, job_id, s.job_memory_mb)
+        return (s.database, s.data_dir, job_id, s.draw_memory_mb)
 
     @staticmethod
     def _fail(error: Path, reason: str) -> None:
         with contextlib.suppress(OSError):
             error.write_text(reason)
+
+
+def _older_than(path: Path, age_s: float) -> bool:
+    """Whether ``path`` exists and was last written more than ``age_s`` seconds ago."""
+    try:
+        return time.time() - path.stat().st_mtime > age_s
+    except OSError:
+        return False

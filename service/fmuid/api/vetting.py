@@ -26,6 +26,7 @@ from typing import Any, TypeVar
 import anyio
 import anyio.to_thread
 
+from fmuid.jobs.reaper import kill_tree
 from fmuid.jobs.vet import COMMAND, READY, VetTask
 
 logger = logging.getLogger(__name__)
@@ -73,7 +74,8 @@ class _Checker:
         return json.loads(line) if line else None
 
     def kill(self) -> None:
-        """Kill the process and every process of its session, then reap it."""
+        """Kill the process, every process below it and every one of its session; reap it."""
+        kill_tree(self.proc.pid)
         kill_session(self.proc.pid)
         self.proc.wait()
 

@@ -1,11 +1,14 @@
 """Is the job store sound? Integrity, a real write, and room on the disk, checked cheaply.
 
-The checks that touch the database run at most every :data:`CHECK_INTERVAL_S` (health is
-polled often and must answer at once); the answer in between is the last one.
+The full ``integrity_check`` runs once, at start; a damage found then stands until a restart.
+The cheap checks that touch the database (``quick_check``, a real write, whether the file is still
+the one opened at start) run at most every :data:`CHECK_INTERVAL_S` (health is polled often and
+must answer at once); the answer in between is the last one.
 """
 
 from __future__ import annotations
 
+import os
 import shutil
 import sqlite3
 import threading
@@ -57,16 +60,37 @@ class StoreHealth:
         self._checked = -CHECK_INTERVAL_S
         self._database: list[str] = []
         self._usage = 0
+        self._file = self._identity()
+        self._at_start = self._check_database("integrity_check")
 
     def problems(self) -> list[str]:
         """Return what is wrong with the store now (empty when it is sound)."""
+        return self.database_problems() + self.room_problems()
+
+    def database_problems(self) -> list[str]:
+        """Return why the database cannot take a job (damaged, unwritable, removed)."""
         with self._lock:
             if time.monotonic() - self._checked >= CHECK_INTERVAL_S:
-                self._database = self._check_database()
+                self._database = self._check_file() or self._check_database("quick_check")
                 self._usage = data_usage(self.data_dir) if self.disk_quota_bytes else 0
                 self._checked = time.monotonic()
-            found = list(self._database)
-        return found + self.room_problems()
+            return self._at_start + self._database
+
+    def _identity(self) -> tuple[int, int] | None:
+        try:
+            found = os.stat(self.db_path)
+        except OSError:
+            return None
+        return found.st_dev, found.st_ino
+
+    def _check_file(self) -> list[str]:
+        """Whether the database is still the file the service opened (not removed or replaced)."""
+        if self._file is not None and self._identity() != self._file:
+            return [
+                f"the job store {self.db_path} was removed or replaced while the service ran;"
+                " restart the service"
+            ]
+        return []
 
     def room_problems(self) -> list[str]:
         """Return why a new job would not fit on the disk (free space now, quota as last seen)."""
@@ -81,13 +105,13 @@ class StoreHealth:
             )
         return found
 
-    def _check_database(self) -> list[str]:
+    def _check_database(self, check: str) -> list[str]:
         try:
             conn = sqlite3.connect(self.db_path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         except sqlite3.Error as exc:
             return [f"cannot open the job store {self.db_path}: {exc}"]
         try:
-            rows = [r[0] for r in conn.execute("PRAGMA quick_check")]
+            rows = [r[0] for r in conn.execute(f"PRAGMA {check}")]
             if rows != ["ok"]:
                 return [f"the job store {self.db_path} is damaged: {'; '.join(rows[:3])}"]
             conn.execute("BEGIN IMMEDIATE")

@@ -111,9 +111,13 @@ def remove_orphans(store: JobStore, alive: set[str]) -> None:
         if ids.get(path.name) not in ("queued", "running"):
             remove_paths([path])
     tmp_root = layout.job_tmp_root
+    by_name = {layout.job_tmp_name(job_id): job_id for job_id in ids}
+    kept = {layout.job_tmp_name(job_id) for job_id in alive}
     for path in tmp_root.iterdir() if tmp_root.is_dir() else []:
-        job_id = path.name.split(".")[0]
-        if path.name not in alive and not layout.report_marker(job_id).is_dir():
+        name, _, suffix = path.name.partition(".")
+        job_id = by_name.get(name)
+        drawing = suffix and job_id is not None and layout.report_marker(job_id).is_dir()
+        if (suffix or name not in kept) and not drawing:
             remove_paths([path])
 
 

@@ -19,6 +19,8 @@ import signal
 import time
 from pathlib import Path
 
+from fmuid.jobs.reaper import kill_tree
+
 JOB_NICENESS = 5
 """Job and report drawing processes run at this lower priority, so that on a machine whose cores
 they fill the service still answers health and polls at once (checking processes run lower
@@ -65,6 +67,12 @@ def kill_group(pgid: int) -> None:
         os.killpg(pgid, signal.SIGKILL)
     except (ProcessLookupError, PermissionError):
         pass
+
+
+def end_job(pid: int) -> None:
+    """Kill a live job leader, every process below it (:mod:`fmuid.jobs.reaper`) and its group."""
+    kill_tree(pid)
+    kill_group(pid)
 
 
 def _environ(pid: int) -> dict[str, str]:

@@ -98,12 +98,13 @@ def take_lease(store: JobStore) -> None:
 
 
 @retried
-def renew_lease(store: JobStore) -> None:
-    """Say this service is still alive."""
+def renew_lease(store: JobStore) -> bool:
+    """Say this service is still alive; return whether it still holds the lease."""
     with store.transaction() as conn:
-        conn.execute(
+        cur = conn.execute(
             "UPDATE lease SET heartbeat = ? WHERE id = 1 AND pid = ?", (time.time(), os.getpid())
         )
+    return cur.rowcount > 0
 
 
 @retried

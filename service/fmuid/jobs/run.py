@@ -37,6 +37,7 @@ from typing import Any
 from fmuid.errors import FmuidError
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.health import free_space_problem
+from fmuid.jobs.reaper import become_subreaper, end_tree_on_parent_death, kill_tree
 from fmuid.jobs.records import TEST_DATA
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
@@ -72,6 +73,7 @@ def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
         try:
             store.fail(job_id, f"exceeded the time limit of {timeout_s:g} s")
         finally:
+            kill_tree(os.getpid(), include_root=False)
             os.killpg(os.getpgrp(), signal.SIGKILL)
 
     watchdog = threading.Timer(timeout_s, expire)
@@ -289,6 +291,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--min-free-bytes", type=int, default=0)
     args = parser.parse_args(argv)
     limit_process(args.memory_mb)
+    become_subreaper()  # whatever the job starts stays below it (fmuid.jobs.reaper)
+    end_tree_on_parent_death()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     logger.info("job %s in process %d, started by %d", args.job_id, os.getpid(), os.getppid())
     store = JobStore(args.db, args.data_dir)
@@ -302,6 +306,8 @@ def main(argv: list[str] | None = None) -> int:
     except StoreError:
         logger.exception("job %s could not record its outcome", job.id)
         return STORE_FAILED_EXIT
+    finally:
+        kill_tree(os.getpid(), include_root=False)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,9 @@ parse of uploaded bytes (spec, CSV files, a design's space, ``modelDescription.x
 probe of the FMU's binary happen here, never in the service, so that no upload can stall the
 service's other requests. The process lowers its CPU priority, limits its own address space
 and, per task, its CPU time; it leads its own session, so that the service can kill it and
-everything it started at once; and it ends when its parent does.
+everything it started at once; and it ends when its parent does. It is a child subreaper
+(:mod:`fmuid.jobs.reaper`): whatever a probed binary started, even in a session of its own, is
+re-parented to it when the probe ends, and killed after every task.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import resource
 import sys
 import threading
@@ -28,6 +31,7 @@ from fmuid.data.checks import check_test_data
 from fmuid.data.limits import over_limit
 from fmuid.errors import FmuidError, SpecError
 from fmuid.jobs.fmucheck import FmuLimits, check_fmu
+from fmuid.jobs.reaper import become_subreaper, kill_tree, reap_children
 from fmuid.jobs.records import TEST_DATA
 from fmuid.model.fmu import FmuModel
 
@@ -86,6 +90,37 @@ class VetTask:
         return json.dumps(asdict(self))
 
 
+MAX_NUMBER_CHARS = 100
+"""Longest number accepted in a spec or a space (Python's int parser stops at 4,300 digits)."""
+_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+_NUMBER = re.compile(rf"[0-9eE.+-]{{{MAX_NUMBER_CHARS + 1},}}")
+_BRACKET = re.compile(r"[\[\]{}]")
+
+
+def check_json_shape(text: str, name: str, limits: InputLimits) -> None:
+    """Refuse JSON with a number too long or nesting too deep, before any parser sees it.
+
+    Raises
+    ------
+    SpecError
+        Naming the field (``spec`` or ``space``) and the limit.
+
+    """
+    bare = _STRING.sub('""', text)
+    long = _NUMBER.search(bare)
+    if long:
+        raise SpecError(
+            f"{name}: a number of {len(long[0])} characters, more than the limit of"
+            f" {MAX_NUMBER_CHARS}"
+        )
+    depth = 0
+    for bracket in _BRACKET.finditer(bare):
+        depth += 1 if bracket[0] in "[{" else -1
+        if depth > limits.max_spec_depth:
+            what = over_limit("nested arrays and objects", "max_spec_depth", limits)
+            raise SpecError(f"{name}: {what}")
+
+
 def vet(task: VetTask) -> dict[str, Any]:
     """Check the spec, the FMU, each CSV file (or a design's space) and how they fit together.
 
@@ -99,9 +134,9 @@ def vet(task: VetTask) -> dict[str, Any]:
     workdir = Path(task.workdir)
     input_limits = InputLimits(**task.input_limits)
     try:
-        spec = spec_from_json(
-            (workdir / "spec.json").read_text(encoding="utf-8"), "spec", input_limits
-        )
+        text = (workdir / "spec.json").read_text(encoding="utf-8")
+        check_json_shape(text, "spec", input_limits)
+        spec = spec_from_json(text, "spec", input_limits)
         fmu_path = workdir / task.fmu_file
         if task.fmu_name is None:
             model = FmuModel(fmu_path)
@@ -134,7 +169,9 @@ def _check_design(path: Path, spec: Spec, model: FmuModel, limits: InputLimits) 
 
     if path.stat().st_size > limits.max_spec_bytes:
         raise SpecError(f"space: {over_limit('bytes', 'max_spec_bytes', limits)}")
-    check_design(space_from_json(path.read_text(errors="replace"), "space"), spec, model)
+    text = path.read_text(errors="replace")
+    check_json_shape(text, "space", limits)
+    check_design(space_from_json(text, "space"), spec, model)
 
 
 def _answer(task: VetTask) -> dict[str, Any]:
@@ -162,6 +199,7 @@ def _watch_parent(parent: int) -> None:
     """End this process once the service that started it is gone."""
     while os.getppid() == parent:
         time.sleep(0.5)
+    kill_tree(os.getpid(), include_root=False)
     os._exit(1)
 
 
@@ -172,11 +210,15 @@ def main(argv: list[str]) -> int:
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
     answers = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever else writes to stdout (native code) goes to the log
+    if not become_subreaper():
+        logger.warning("not a child subreaper: a process a probed FMU detaches may outlive it")
     threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
     answers.write(READY + "\n")
     answers.flush()
     for line in sys.stdin:
         answer = _answer(VetTask(**json.loads(line)))
+        kill_tree(os.getpid(), include_root=False)  # what the probed binary left behind
+        reap_children()
         recycle = answer.pop("recycle", False) or _resident_mb() > RECYCLE_RSS_MB
         answers.write(json.dumps(answer) + "\n")
         answers.flush()

@@ -8,15 +8,21 @@ is cancelled, and, when a process ends without recording an outcome (a segfault,
 fails its job with the reason read from the exit status and the log; when the store cannot take
 that outcome (a full disk), it tries again on every round until it can.
 
-The service holds a lease in the store. On start it takes the lease, kills every process left by
-the previous run of the same store, queues the interrupted jobs again and removes their leftover
-files. Every :data:`MAINTENANCE_S` it removes jobs past ``settings.retention_s`` and files no job
-owns.
+One service owns a data folder: it holds an exclusive lock of the operating system on it for
+its whole life (:mod:`fmuid.jobs.owner`), so that a second one refuses to start, and a lease in
+the store, which every claim of a job checks; a service that finds its lease gone stops
+claiming, says so in health and exits. On start it takes the lock and the lease, kills every
+process left by the previous run of the same store, queues the interrupted jobs again and
+removes their leftover files. Every :data:`MAINTENANCE_S` it removes jobs past
+``settings.retention_s`` and files no job owns.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import os
+import signal
 import sqlite3
 import threading
 import time
@@ -27,7 +33,9 @@ from fmuid.jobs import housekeeping as hk
 from fmuid.jobs import restarts
 from fmuid.jobs.crash import exit_message
 from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmProcess, WarmServer
-from fmuid.jobs.proc import end_processes, find_job_processes, kill_group
+from fmuid.jobs.layout import fit_own_tmp
+from fmuid.jobs.owner import OwnerLock, StoreInUse
+from fmuid.jobs.proc import end_job, end_processes, find_job_processes, kill_group
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.settings import Settings
 
@@ -64,6 +72,8 @@ class Supervisor:
         self.store = store
         self.layout = store.layout
         self.layout.logs.mkdir(parents=True, exist_ok=True)
+        fit_own_tmp()  # and a TMPDIR too long for any socket path is refused here
+        self.layout.job_tmp_root.parent.mkdir(parents=True, exist_ok=True)
         self._running: dict[str, _Running] = {}
         self._lock = threading.Lock()
         self._wake = threading.Event()
@@ -73,12 +83,19 @@ class Supervisor:
         self._renewed = 0.0
         self._maintained = 0.0
         self._recovered = False
+        self._lost: str | None = None
+        self._owner = OwnerLock(settings.data_dir, settings.database)
         self._warm = WarmServer(settings.database, settings.warm_recycle_jobs)
 
     @property
     def warm(self) -> WarmServer:
         """The warm server that forks job (and report drawing) processes."""
         return self._warm
+
+    @property
+    def problem(self) -> str | None:
+        """Why this service no longer supervises its store (``None`` while it does)."""
+        return self._lost
 
     @property
     def busy(self) -> int:
@@ -94,13 +111,21 @@ class Supervisor:
 
         Raises
         ------
+        StoreInUse
+            When another live service holds the data folder.
         LeaseHeld
             When another live service uses the same store.
 
         """
         try:
+            self._owner.acquire()
+        except StoreInUse as exc:
+            logger.error("not starting: %s", exc)
+            raise
+        try:
             self._recover()
         except restarts.LeaseHeld:
+            self._owner.release()
             raise
         except (StoreError, sqlite3.Error):
             logger.exception("cannot recover the jobs of %s yet", self.settings.database)
@@ -134,14 +159,24 @@ class Supervisor:
             self._thread.join(timeout=10)
         with self._lock:
             for run in self._running.values():
-                kill_group(run.process.pid)
+                end_job(run.process.pid)
                 run.process.wait()
                 hk.remove_paths([self.layout.job_tmp(run.job.id)])
             self._running.clear()
+        root = self.layout.job_tmp_root  # whatever a job or a drawing left there, then itself
+        hk.remove_paths(list(root.iterdir()) if root.is_dir() else [])
+        with contextlib.suppress(OSError):
+            root.rmdir()
         try:
-            restarts.release_lease(self.store)
+            if self._lost is None:
+                restarts.release_lease(self.store)
         except StoreError:
             logger.exception("could not release the lease of the job store")
+        try:
+            self.store.checkpoint()
+        except sqlite3.Error:
+            logger.exception("could not checkpoint the job store %s", self.settings.database)
+        self._owner.release()
 
     def wake(self) -> None:
         """Look at the queue now (a job was submitted or cancelled)."""
@@ -152,7 +187,7 @@ class Supervisor:
         with self._lock:
             run = self._running.get(job_id)
         if run is not None:
-            kill_group(run.process.pid)
+            end_job(run.process.pid)
         self._wake.set()
 
     def _loop(self) -> None:
@@ -174,7 +209,7 @@ class Supervisor:
 
     def _launch(self) -> None:
         while self.busy < self.settings.workers and not self._stop.is_set():
-            job = self.store.claim_next()
+            job = self.store.claim_next(owner=os.getpid())
             if job is None:
                 return
             self._spawn(job)
@@ -182,7 +217,9 @@ class Supervisor:
     def _housekeeping(self) -> None:
         now = time.monotonic()
         if now - self._renewed > LEASE_RENEW_S:
-            restarts.renew_lease(self.store)
+            if not restarts.renew_lease(self.store):
+                self._lose_lease()
+                return
             self._renewed = now
         retention = self.settings.retention_s
         interval = min(MAINTENANCE_S, retention / 4) if retention > 0 else MAINTENANCE_S
@@ -198,6 +235,13 @@ class Supervisor:
         hk.remove_orphans(self.store, alive)
         hk.remove_unused_blobs(self.store)
         self.store.keep_reserve()
+
+    def _lose_lease(self) -> None:
+        """Another service took the store: claim nothing more, fail health, and exit."""
+        self._lost = f"another service took the job store {self.settings.database}; exiting"
+        logger.error("%s", self._lost)
+        self._stop.set()
+        os.kill(os.getpid(), signal.SIGTERM)  # uvicorn stops the app: stop() kills our jobs
 
     def _spawn(self, job: Job) -> None:
         args = [
@@ -225,6 +269,10 @@ class Supervisor:
             return
         self.store.set_pid(job.id, process.pid)
         with self._lock:
+            if self._stop.is_set():  # stop() gave up waiting for this thread: leave nothing
+                end_job(process.pid)
+                hk.remove_paths([tmp])
+                return
             self._running[job.id] = _Running(job, process, log_path)
         threading.Thread(target=self._wake_at_end, args=(process,), daemon=True).start()
         logger.info("job %s (%s) started in process %s", job.id, job.kind, process.pid)
@@ -254,10 +302,10 @@ class Supervisor:
         for run in runs:
             current = self.store.get(run.job.id)
             if current is None or current.status == "cancelled":
-                kill_group(run.process.pid)
+                end_job(run.process.pid)
             elif time.monotonic() - run.started > limit:
                 self.store.fail(run.job.id, f"exceeded the time limit of {limit:g} s")
-                kill_group(run.process.pid)
+                end_job(run.process.pid)
 
     def _reap(self) -> None:
         with self._lock:

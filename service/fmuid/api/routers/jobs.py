@@ -51,8 +51,9 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
         429: {"model": ErrorOut, "description": "The queue is full (FMUID_QUEUE_LIMIT)."},
         503: {
             "model": ErrorOut,
-            "description": "The named built-in model is not built, or every checking process"
-            " stayed busy for FMUID_CHECK_WAIT_S.",
+            "description": "The job store is damaged or unwritable (health says why), the named"
+            " built-in model is not built, or every checking process stayed busy for"
+            " FMUID_CHECK_WAIT_S.",
         },
         507: {"model": ErrorOut, "description": "The disk is full or the data over its quota."},
     },
@@ -110,7 +111,10 @@ async def create_job(
 
 
 def _check_room(checks: StoreHealth, store: JobStore, queue_limit: int) -> None:
-    """Answer 507 when the disk has no room for a job, 429 when the queue is full."""
+    """Answer 503 when the store cannot take a job, 507 without room, 429 with a full queue."""
+    damaged = checks.database_problems()
+    if damaged:
+        raise HTTPException(status_code=503, detail="; ".join(damaged))
     no_room = checks.room_problems()
     if no_room:
         raise HTTPException(status_code=507, detail="; ".join(no_room))

@@ -23,6 +23,14 @@ from fmuid.api.schemas import UNAUTHORIZED, ErrorOut
 from fmuid.jobs.store import Job
 from fmuid.settings import Settings
 
+REPORT_HEADERS = {
+    "Content-Security-Policy": "default-src 'none'; img-src 'self' data:; style-src 'self'"
+    " 'unsafe-inline'; base-uri 'self'; form-action 'none'; frame-ancestors 'none'",
+    "X-Content-Type-Options": "nosniff",
+}
+"""Headers of report pages and files: the page runs no script and loads nothing from elsewhere,
+whatever an uploaded model's names put into it."""
+
 router = APIRouter(prefix="/v1/jobs", tags=["reports"])
 
 _FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
@@ -69,7 +77,7 @@ async def get_report(
         html = _LINK.sub(
             lambda m: f'{m[1]}="{m[2]}?sig={sign(settings.api_token or "", prefix + m[2])}"', html
         )
-    return HTMLResponse(html)
+    return HTMLResponse(html, headers=REPORT_HEADERS)
 
 
 @router.get(
@@ -90,4 +98,4 @@ async def get_report_file(
     path = directory / file_name
     if len(file_name) > MAX_FILE_NAME or not _FILE_NAME.fullmatch(file_name) or not path.is_file():
         raise HTTPException(status_code=404, detail=f"no file {file_name[:80]!r} in the report")
-    return FileResponse(path)
+    return FileResponse(path, headers=REPORT_HEADERS)
