@@ -135,14 +135,14 @@ def _steps(
     steps: Sequence[Step], estimates: dict[str, AddedEstimate], coupling: float | None
 ) -> tuple[EffectStep, ...]:
     out = []
-    for k, s in enumerate(steps):
+    for s in steps:
         e = s.effect
         values = {n: estimates[n].estimate for n in e.names}
         fine = e.side in ("feedback", "input") or e.effect == "output_lag"
         out.append(EffectStep(
             e.effect, e.label, e.sentence(values), {n: estimates[n] for n in e.names},
             s.chi2_before, s.fit.chi2, s.fit.p_value, s.p_adjusted,
-            coupling if fine and k == len(steps) - 1 else None,
+            coupling if fine else None,
         ))  # fmt: skip
     return tuple(out)
 

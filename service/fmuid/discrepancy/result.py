@@ -141,8 +141,9 @@ class EffectStep:
     p_value, p_adjusted
         Likelihood-ratio p-value of the step, and adjusted for its round's scan.
     coupling_error
-        For effects on a fine grid (feedback, lags, clipping): the largest change of the final
-        fit's predictions, in sigmas, when that grid's step is halved; None otherwise.
+        For effects on a fine grid (feedback, input effects, output lags): the largest change of
+        the final model's predictions, in sigmas, when that grid's step is halved; None
+        otherwise.
 
     """
 
