@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 
+from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.discrepancy import diagnose
 from fmuid.discrepancy.generic import filtered
+from fmuid.model.simulator import Simulator
 
 
 def test_filters_on_a_jittered_grid_with_a_repeated_row_match_the_ode() -> None:
@@ -39,3 +45,20 @@ def test_equal_steps_go_through_lsim_and_agree_with_the_recursion() -> None:
     jitter[1:-1] += 1e-7 * np.sin(np.arange(99))
     np.testing.assert_allclose(filtered(num, den, u, time), filtered(num, den, u, jitter),
                                atol=1e-6)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_diagnose_takes_a_record_with_a_dropped_row_and_jittered_times(msd_fmu: Path) -> None:
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 12.0, 0.05) + rng.uniform(0.0, 0.004, 240)
+    t = np.delete(np.sort(t), 37)  # a dropped row
+    u = np.where(t > 1.0, 1.0, 0.0) + 0.3 * np.sin(2.0 * t)
+    sim = Simulator(msd_fmu)
+    x = sim.simulate({}, t, {"f": u}, t, ["x"])[:, 0] + rng.normal(0.0, 0.005, t.size)
+    sim.close()
+    spec = spec_from_json(
+        '{"parameters": {"k": {"start": 4, "lower": 0.5, "upper": 20}}, "inputs": ["f"],'
+        ' "outputs": {"x": {"sigma": 0.005}}, "global_search": false}'
+    )
+    result = diagnose(msd_fmu, [experiment_from_arrays("e.csv", t, {"f": u, "x": x})], spec)
+    assert result.mismatch is False  # the FMU made the data: nothing is left out
