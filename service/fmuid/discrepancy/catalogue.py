@@ -214,8 +214,11 @@ def rate_sources(problem: Problem, units: Mapping[str, str]) -> dict[str, tuple[
 
     An FMU output whose unit is a fitted output's unit per second is that output's rate; a
     fitted output whose unit is already per second is a rate itself; otherwise the finite
-    difference of the fitted output is its rate (named ``d<output>``).
+    difference of the fitted output is its rate (named ``d<output>``), when the output is a
+    position (its unit a length or an angle) or declares no unit: friction acts against a
+    motion, not against the rate of a voltage or a force.
     """
+    words = fx.Words(units)
     out: dict[str, tuple[str, bool]] = {}
     for y in problem.outputs:
         unit = units.get(y, "")
@@ -225,7 +228,7 @@ def rate_sources(problem: Problem, units: Mapping[str, str]) -> dict[str, tuple[
         match = [o for o in problem.model.outputs if unit and units.get(o) == f"{unit}/s"]
         if match:
             out[match[0]] = (match[0], False)
-        else:
+        elif not unit or words.quantity(y) in ("displacement", "angle"):
             out[y] = (f"d{y}", True)
     return out
 
