@@ -53,9 +53,16 @@ def explained(
         name = next(iter(step.parameters))
         drop = step.chi2_before - step.chi2_after
         lead = "" if len(steps) == 1 else f"step {k + 1}, "
+        coupling = step.coupling_error
+        rough = (
+            f"; halving the co-simulation step moves the fit by {coupling:.2g} sigma: the term "
+            "is not resolved at this step"
+            if coupling is not None and coupling > 1.0
+            else ""
+        )
         parts.append(
             f"{lead}{step.effect}: {step.description} ({name} {_fmt_ci(first)}; chi2 drop "
-            f"{drop:.4g}, {p_text(step.p_value)})"
+            f"{drop:.4g}, {p_text(step.p_value)}{rough})"
         )
     out = "; ".join(parts)
     out = out[0].upper() + out[1:]
