@@ -4,6 +4,7 @@ images that a browser can load when a token is set, and a clear 404 for an over-
 
 from __future__ import annotations
 
+import base64
 import os
 import re
 import subprocess
@@ -82,19 +83,16 @@ def test_options_answered_and_documented(secured):
     assert "400" in schema["paths"]["/v1/jobs"]["post"]["responses"]
 
 
-def test_report_images_open_with_their_signature_only(secured, done_job):
+def test_report_figures_are_embedded_and_files_need_the_token(secured, done_job):
     page = httpx.get(f"{secured.url}/v1/jobs/{done_job}/report", headers=BEARER)
     assert page.status_code == 200
     images = re.findall(r'<img src="([^"]+)"', page.text)
-    assert images and all("?sig=" in image for image in images)
+    # the figures travel inside the page (a saved page keeps them), as PNG data
+    assert images and all(image.startswith("data:image/png;base64,") for image in images)
+    assert base64.b64decode(images[0].partition(",")[2]).startswith(b"\x89PNG")
     base = f"{secured.url}/v1/jobs/{done_job}/report/"
-    image = httpx.get(base + images[0])  # as a browser would: no Authorization header
-    assert image.status_code == 200 and image.content.startswith(b"\x89PNG")
-    name, _, signature = images[0].partition("?sig=")
-    assert httpx.get(base + name).status_code == 401
-    assert httpx.get(base + name + "?sig=" + "0" * 32).status_code == 401
-    other = f"{secured.url}/v1/jobs/{done_job}/result?sig={signature}"
-    assert httpx.get(other).status_code == 401
+    assert httpx.get(base + "diagnose_fit.png").status_code == 401  # no token, no signature
+    assert httpx.get(base + "diagnose_fit.png?sig=" + "0" * 32).status_code == 401
 
 
 def test_over_long_report_file_name_is_404(secured, done_job):

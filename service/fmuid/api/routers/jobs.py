@@ -111,13 +111,17 @@ async def create_job(
 
 
 def _check_room(checks: StoreHealth, store: JobStore, queue_limit: int) -> None:
-    """Answer 503 when the store cannot take a job, 507 without room, 429 with a full queue."""
-    damaged = checks.database_problems()
-    if damaged:
-        raise HTTPException(status_code=503, detail="; ".join(damaged))
+    """Answer 507 without room, 503 when the store cannot take a job, 429 with a full queue.
+
+    A full disk also makes the store unwritable: its room is checked first, so that the answer
+    names the cause (FMUID_MIN_FREE_BYTES) rather than its effect.
+    """
     no_room = checks.room_problems()
     if no_room:
         raise HTTPException(status_code=507, detail="; ".join(no_room))
+    damaged = checks.database_problems()
+    if damaged:
+        raise HTTPException(status_code=503, detail="; ".join(damaged))
     queued = store.counts()["queued"]
     if queued >= queue_limit:
         raise HTTPException(
