@@ -107,12 +107,12 @@ async def create_job(
 
 def _check_room(checks: StoreHealth, store: JobStore, queue_limit: int) -> None:
     """Answer 503 when the store cannot take a job, 507 without room, 429 with a full queue."""
+    no_room = checks.room_problems()  # first: a full disk also fails the store's test write
+    if no_room:
+        raise HTTPException(status_code=507, detail="; ".join(no_room))
     damaged = checks.database_problems()
     if damaged:
         raise HTTPException(status_code=503, detail="; ".join(damaged))
-    no_room = checks.room_problems()
-    if no_room:
-        raise HTTPException(status_code=507, detail="; ".join(no_room))
     queued = store.counts()["queued"]
     if queued >= queue_limit:
         raise HTTPException(
