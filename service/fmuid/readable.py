@@ -54,6 +54,15 @@ def interval(ends: Sequence[float | None], digits: int = 4) -> str:
     return f"[{interval_end(ends[0], digits)}, {interval_end(ends[1], digits)}]"
 
 
+def shown_seconds(seconds: float) -> float:
+    """Return ``seconds`` rounded as :func:`duration` prints it (for a result's JSON)."""
+    if seconds < 100:
+        return float(f"{seconds:.3g}")
+    if seconds < 6000:
+        return float(round(seconds))
+    return float(f"{seconds / 3600:.3g}") * 3600
+
+
 def duration(seconds: float) -> str:
     """Return a duration with three significant digits: ``8.08 s``, ``413 s``, ``2.5 h``."""
     if seconds < 100:

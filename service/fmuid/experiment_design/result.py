@@ -10,6 +10,7 @@ from fmuid.estimation.result import Cost
 from fmuid.experiment_design.signals import Trial, trial_from_dict
 from fmuid.experiment_design.verify import Verification
 from fmuid.provenance import Provenance, entry, read
+from fmuid.readable import shown_seconds
 
 
 @dataclass(frozen=True)
@@ -134,7 +135,9 @@ class DesignResult:
             "screened": self.screened,
             "cost": {
                 **self.cost.to_dict(),
-                **{k: round(v, 3) for k, v in self.stage_seconds.items()},
+                # rounded as the report prints them: a page drawn from the JSON reads the same
+                # as one drawn from the computed result
+                **{k: shown_seconds(v) for k, v in self.stage_seconds.items()},
             },
             **entry(self.provenance),
         }
