@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from fmuid.discrepancy.effects import RENAMED, RENAMED_PARAMETERS
 from fmuid.discrepancy.residual_tests import TestResult, Window
 from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis, EffectStep
+from fmuid.discrepancy.words import RENAMED, RENAMED_PARAMETERS
 from fmuid.errors import SpecError
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult

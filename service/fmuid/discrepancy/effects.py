@@ -391,24 +391,3 @@ class DeclaredPhysics(Effect):
         p = self.parameters[0]
         value = f"{p.name} = {num(values[p.name])} {p.unit}".rstrip()
         return f"{self.description} ({value})"
-
-
-def effect_of(name: str) -> str:
-    """Return the current name of an effect, mapping the names of earlier versions."""
-    return RENAMED.get(name, name)
-
-
-RENAMED = {
-    "sensor_lag": "output_lag",
-    "steering_lag": "input_lag",
-    "steer_offset": "input_offset",
-    "gyro_bias": "output_bias",
-}
-"""Effect names of earlier versions (result files written by them still load)."""
-
-RENAMED_PARAMETERS = {
-    "tau_sensor": "tau_outputs",
-    "tau_steer": "tau_delta",
-    "offset_steer": "offset_delta",
-}
-"""Added parameter names of earlier versions (a steer input was named by its role)."""

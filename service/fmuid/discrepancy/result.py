@@ -307,7 +307,7 @@ def verdict(d: dict[str, Any]) -> str:
 
     Effect names of earlier versions read as today's (``sensor_lag`` as ``output_lag``).
     """
-    from fmuid.discrepancy.effects import effect_of
+    from fmuid.discrepancy.words import effect_of
 
     level = d.get("false_alarm", 0.01)
     if not d.get("mismatch"):

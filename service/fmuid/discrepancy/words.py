@@ -40,3 +40,24 @@ class Words:
 def num(value: float) -> str:
     """Return a value with three significant digits."""
     return f"{value:.3g}"
+
+
+def effect_of(name: str) -> str:
+    """Return the current name of an effect, mapping the names of earlier versions."""
+    return RENAMED.get(name, name)
+
+
+RENAMED = {
+    "sensor_lag": "output_lag",
+    "steering_lag": "input_lag",
+    "steer_offset": "input_offset",
+    "gyro_bias": "output_bias",
+}
+"""Effect names of earlier versions (result files written by them still load)."""
+
+RENAMED_PARAMETERS = {
+    "tau_sensor": "tau_outputs",
+    "tau_steer": "tau_delta",
+    "offset_steer": "offset_delta",
+}
+"""Added parameter names of earlier versions (a steer input was named by its role)."""
