@@ -115,19 +115,22 @@ def ljung_box(series: Series, lags: int | None = None) -> TestResult:
 
 def lagged(values: np.ndarray, lags: Sequence[int]) -> np.ndarray:
     """Matrix whose columns are ``values`` delayed by each lag (held at the first sample)."""
-    cols = [np.concatenate([np.full(k, values[0]), values[: len(values) - k]]) for k in lags]
+    n = len(values)
+    cols = [np.concatenate([np.full(min(k, n), values[0]), values[: n - min(k, n)]]) for k in lags]
     return np.column_stack(cols)
 
 
 def input_cross_correlation(series: Series, max_lag_s: float = 2.0) -> list[TestResult]:
     """Ljung's residual-input cross-correlation test, one per input.
 
-    The residuals are regressed on the input delayed by 0 ... ``max_lag_s`` seconds (up to 10
-    lags); under the null, ``n R^2`` is chi2 with df = rank of the (centred) regressors.
+    The residuals are regressed on the input delayed by 0 ... ``max_lag_s`` seconds, at most a
+    fifth of the record (up to 10 lags); under the null, ``n R^2`` is chi2 with df = rank of the
+    (centred) regressors.
     """
     out = []
     r = series.residuals - series.residuals.mean()
     dt = float(np.median(np.diff(series.time)))
+    max_lag_s = min(max_lag_s, float(series.time[-1] - series.time[0]) / 5)
     n_lags = max(1, min(10, int(round(max_lag_s / dt)) + 1))
     step = max(1, int(round(max_lag_s / dt / max(n_lags - 1, 1))))
     for u in series.inputs.values():
