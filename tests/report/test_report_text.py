@@ -1,5 +1,7 @@
 """Every report kind reads as text a person can read: no raw math text, nan, inf, p = 0 or −∞.
 
+The demo's report (small grid) is checked the same way in ``tests/test_demo.py``.
+
 Each report is drawn from a real (small) study; the page's text is read in headless Chromium
 where it is installed (else from the HTML), and the text of every figure (titles, labels, tick
 labels, legends) from matplotlib after drawing.
@@ -56,9 +58,8 @@ def test_numbers_read_as_a_person_writes_them():
     ]
 
 
-@pytest.fixture
-def figure_texts(monkeypatch):
-    """Collect the visible text of every figure a report embeds."""
+def collect_figure_texts(monkeypatch) -> list[str]:
+    """Return a list that collects the visible text of every figure a report embeds."""
     texts: list[str] = []
     original = page_module.HtmlPage.figure
 
@@ -69,6 +70,12 @@ def figure_texts(monkeypatch):
 
     monkeypatch.setattr(page_module.HtmlPage, "figure", figure)
     return texts
+
+
+@pytest.fixture
+def figure_texts(monkeypatch):
+    """Collect the visible text of every figure a report embeds."""
+    return collect_figure_texts(monkeypatch)
 
 
 def page_text(index, tmp_path) -> str:
@@ -85,6 +92,7 @@ def page_text(index, tmp_path) -> str:
 
 
 def check(index, texts, tmp_path):
+    """Assert that the page and the figures' texts read cleanly."""
     text = page_text(index, tmp_path)
     assert text.strip()
     assert unreadable(text) == [], text
