@@ -45,27 +45,36 @@ def run_case(task: tuple[str | None, int], cache: Path | None, fmu_dir: Path) ->
     row.update({k: case.info.get(k) for k in ("concealed", "lrt_p", "achieved_lambda")})
     t0 = time.perf_counter()
     try:
-        result = diagnose(um.build_fmu(fmu_dir), case.experiments,
-                          spec_from_json(um.study_spec_json())).to_dict()  # fmt: skip
+        result = diagnose(
+            um.build_fmu(fmu_dir), case.experiments, spec_from_json(um.study_spec_json())
+        ).to_dict()
     except Exception as exc:  # a failure is a result of the bench, not its end
         return {**row, "error": f"{type(exc).__name__}: {exc}"}
     row["seconds"] = round(time.perf_counter() - t0, 1)
-    ties = [t["effect"] if isinstance(t, dict) else str(t) for t in result.get("indistinguishable") or []]
+    ties = [
+        t["effect"] if isinstance(t, dict) else str(t)
+        for t in result.get("indistinguishable") or []
+    ]
     steps = result.get("effects") or []
     row.update(
-        mismatch=result["mismatch"], named=result["effect"] if result["mismatch"] else "none",
-        ties=ties, steps=[s.get("effect") for s in steps],
+        mismatch=result["mismatch"],
+        named=result["effect"] if result["mismatch"] else "none",
+        ties=ties,
+        steps=[s.get("effect") for s in steps],
         added={s.get("effect"): s.get("parameters") for s in steps},
-        chi2_before=round(result["chi2_before"], 1), chi2_after=round(result["chi2_after"], 1),
+        chi2_before=round(result["chi2_before"], 1),
+        chi2_after=round(result["chi2_after"], 1),
         simulations=(result.get("cost") or {}).get("simulations"),
-    )  # fmt: skip
+    )
     return row
 
 
 def table(rows: list[dict[str, Any]]) -> None:
     """Per effect: flagged, named right, named right or tied; controls: false alarms."""
-    print(f"\n{'effect':<18} {'cases':>5} {'concealed':>9} {'flagged':>7} {'named':>5} "
-          f"{'or tied':>7} {'median s':>8}")  # fmt: skip
+    print(
+        f"\n{'effect':<18} {'cases':>5} {'concealed':>9} {'flagged':>7} {'named':>5} "
+        f"{'or tied':>7} {'median s':>8}"
+    )
     for effect in ["control", *um.EFFECTS]:
         sel = [r for r in rows if r["effect"] == effect and "mismatch" in r]
         if not sel:
@@ -73,13 +82,17 @@ def table(rows: list[dict[str, Any]]) -> None:
         secs = statistics.median(r["seconds"] for r in sel)
         flagged = sum(r["mismatch"] for r in sel)
         if effect == "control":
-            print(f"{'control':<18} {len(sel):>5} {'':>9} {flagged:>7} {'':>5} {'':>7} {secs:>8.0f}"
-                  "   (flagged = false alarms)")  # fmt: skip
+            print(
+                f"{'control':<18} {len(sel):>5} {'':>9} {flagged:>7} {'':>5} {'':>7} {secs:>8.0f}"
+                "   (flagged = false alarms)"
+            )
             continue
         named = sum(r["named"] == effect for r in sel)
         tied = sum(r["named"] == effect or effect in r["ties"] for r in sel)
         conc = sum(bool(r.get("concealed")) for r in sel)
-        print(f"{effect:<18} {len(sel):>5} {conc:>9} {flagged:>7} {named:>5} {tied:>7} {secs:>8.0f}")
+        print(
+            f"{effect:<18} {len(sel):>5} {conc:>9} {flagged:>7} {named:>5} {tied:>7} {secs:>8.0f}"
+        )
     for r in rows:
         if "error" in r:
             print(f"FAILED: {r['effect']} seed {r['seed']}: {r['error']}")

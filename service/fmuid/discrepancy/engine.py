@@ -147,6 +147,11 @@ def _steps(
     return tuple(out)
 
 
+def refit(problem: Problem, fit: FitResult) -> FitResult:
+    """Refine a fit of the study on the problem the diagnosis simulates (its fine input grid)."""
+    return fit_problem(problem, start=fit.estimates, global_search=False)
+
+
 def diagnose_problem(
     problem: Problem,
     *,
@@ -177,6 +182,9 @@ def diagnose_problem(
 
     """
     opts = options
+    common = augmented(problem, [])
+    if common.predictor is not problem.predictor:
+        problem, fit = common, None if fit is None else refit(common, fit)
     run = Run(problem, opts, progress)
     if fit is None:
         fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)

@@ -118,7 +118,11 @@ def sensitivity_basis(jacobian: np.ndarray) -> np.ndarray:
 
 
 def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
-    """Return the root problem with the effects' parameters added and the effects applied."""
+    """Return the root problem with the effects' parameters added and the effects applied.
+
+    With no effect, the root problem simulated as its augmentations are (on their fine input
+    grid when the FMU needs it: :attr:`AugmentedPredictor.fine_inputs`).
+    """
     params = dict(root.parameter_specs)
     for c in candidates:
         for p in c.parameters:
@@ -128,9 +132,8 @@ def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
     if isinstance(base, AugmentedPredictor):
         effects = (*base.effects, *effects)
         base = base.base
-    predictor = (
-        AugmentedPredictor(base, effects) if effects and isinstance(base, FmuPredictor) else base
-    )
+    wrapped = AugmentedPredictor(base, effects) if isinstance(base, FmuPredictor) else None
+    predictor = wrapped if wrapped is not None and (effects or wrapped.fine_inputs) else base
     return Problem(
         root.fmu_path, root.experiments, root.spec, predictor=predictor, parameters=params,
         sigma=root.sigma, sigma_method=root.sigma_method, model=root.model,
