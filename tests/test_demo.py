@@ -44,7 +44,7 @@ def test_small_grid_demo_writes_the_study_report(tmp_path, monkeypatch):
         low, high = (float(v) for v in rows[name][6].strip("[]").split(", "))
         assert low < NOMINAL[name] < high
     assert "Experiment advice" in text
-    check(index, figure_texts, tmp_path)  # in Chromium where installed
     assert "seed 0" in text and "sigma = max|gam_t| / SNR" in text
     assert any(line.startswith("drawing the per-dataset reports: 4/4") for line in lines)
     assert len(list((tmp_path / "demo").glob("*/index.html"))) == 4
+    check([index], figure_texts, tmp_path)  # last: skipped where Chromium is not installed
