@@ -1,8 +1,8 @@
 """A real profile job's report, served by the service with a token set, opened in Chromium.
 
 A browser sends no bearer token: the page opens through its signed link
-(``GET /v1/jobs/{id}/report-link``), its figures are embedded, and no other page, file or job
-opens with that signature.
+(``GET /v1/jobs/{id}/report-link``), its figures are embedded, its link to the profile path's
+CSV carries that file's own signature, and no other page, file or job opens with the page's.
 """
 
 import json
@@ -63,6 +63,10 @@ def test_token_protected_report_opens_in_a_browser(secured, msd_fmu, tmp_path):
         check_report_page(driver, url, list(TRUTH), tmp_path / "service_report.png")
         sources = driver.execute_script("return Array.from(document.images).map(i => i.src)")
         assert all(s.startswith("data:image/png;base64,") for s in sources)
+        links = driver.execute_script("return Array.from(document.links).map(a => a.href)")
+        table = next(link for link in links if "/profile_path.csv?sig=" in link)
+        assert httpx.get(table).text.startswith("parameter,value,chi2")  # signed: opens
+        assert httpx.get(table.partition("?")[0]).status_code == 401
         driver.get(page)  # the bare page, without the signature
         assert "token" in driver.execute_script("return document.body.innerText")
     finally:

@@ -232,19 +232,10 @@ class ProfileResult:
             }
         )
 
-    def path_frame(self) -> Any:
-        """Return a pandas table of every profile's path: one row per point, in value order.
-
-        Columns: ``parameter`` (the one profiled), ``value`` (its value there), ``chi2`` (the
-        re-fitted chi2; NaN where the point failed), ``delta_chi2`` (above the optimum),
-        ``inside`` (``delta_chi2`` within the simultaneous threshold), then the re-fitted value
-        of every free parameter (the profiled one holds ``value``), ``at_bound`` (others on a
-        bound there) and ``error`` (why a point failed, else empty).
-        """
-        from fmuid.frames import pandas_module
-
+    def path_rows(self) -> list[dict[str, Any]]:
+        """Return every profile's path, one row per point (the columns of :meth:`path_frame`)."""
         limit = self.thresholds["simultaneous"]
-        rows = [
+        return [
             {
                 "parameter": name,
                 "value": pt.value,
@@ -261,7 +252,19 @@ class ProfileResult:
             for name, profile in self.parameters.items()
             for pt in profile.points
         ]
-        return pandas_module().DataFrame(rows)
+
+    def path_frame(self) -> Any:
+        """Return a pandas table of every profile's path: one row per point, in value order.
+
+        Columns: ``parameter`` (the one profiled), ``value`` (its value there), ``chi2`` (the
+        re-fitted chi2; NaN where the point failed), ``delta_chi2`` (above the optimum),
+        ``inside`` (``delta_chi2`` within the simultaneous threshold), then the re-fitted value
+        of every free parameter (the profiled one holds ``value``), ``at_bound`` (others on a
+        bound there) and ``error`` (why a point failed, else empty).
+        """
+        from fmuid.frames import pandas_module
+
+        return pandas_module().DataFrame(self.path_rows())
 
 
 def _num(v: float | None) -> float | None:
