@@ -11,6 +11,7 @@ from fmuid.data.checks import check_test_data
 from fmuid.discrepancy.engine import DiagnoseOptions, diagnose_problem
 from fmuid.discrepancy.result import Diagnosis
 from fmuid.estimation.problem import Problem
+from fmuid.formats.start import Start, start_at
 from fmuid.model.fmu import FmuModel
 from fmuid.progress import ProgressCallback, default_progress
 
@@ -23,6 +24,7 @@ def diagnose(
     options: DiagnoseOptions = DiagnoseOptions(),
     problem: Problem | None = None,
     test_data: Sequence[Experiment] = (),
+    start: Start | None = None,
 ) -> Diagnosis:
     """Fit the spec's model, test its residuals and explain a mismatch by left-out physics.
 
@@ -45,6 +47,10 @@ def diagnose(
     test_data
         Held-out experiments: the base and each augmented model are simulated on them
         (``validation``: RMS simulation error per file and output, before and after).
+    start
+        Where the fit begins (:func:`fmuid.formats.start.start_at`): an earlier fit or
+        profile result (the object, or its JSON file: its estimates, without the global
+        search) or an ``.ssv`` file; as the CLI's ``--start``. Ignored with ``problem``.
 
     Returns
     -------
@@ -56,6 +62,7 @@ def diagnose(
 
     started = provenance.now()
     progress = default_progress(progress)
+    spec = start_at(spec, start)
     problem = problem or make_problem(fmu_path, experiments, spec)
     if test_data:
         model = problem.model
