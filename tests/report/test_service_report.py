@@ -32,7 +32,7 @@ def _step_csv(msd_fmu, path):
 
 @pytest.fixture
 def secured(tmp_path):
-    service = Service(tmp_path / "service", FMUID_API_TOKEN=TOKEN).start()
+    service = Service(tmp_path / "service", FMUID_API_TOKEN=TOKEN).start(timeout=90)
     yield service
     service.stop()
 
