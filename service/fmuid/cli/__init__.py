@@ -10,6 +10,7 @@ import argparse
 import json
 import logging
 import math
+import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -146,14 +147,16 @@ def _cmd_profile(args: argparse.Namespace) -> int:
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
-    from fmuid.discrepancy import diagnose
+    from fmuid.discrepancy import DiagnoseOptions, diagnose
 
     fmu, experiments, spec, problem = _load_inputs(args)
     tests = _test_data(args)
+    options = DiagnoseOptions(workers=args.workers or os.cpu_count() or 1)
     with ProgressDisplay() as progress:
         result = diagnose(
-            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
-        )
+            fmu, experiments, spec, options=options, progress=progress, problem=problem,
+            test_data=tests,
+        )  # fmt: skip
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -249,7 +252,7 @@ def _parser() -> argparse.ArgumentParser:
             help="settle-in window [s] left out of the likelihood (default: the spec's settle)",
         )  # fmt: skip
         interface_option(p)
-        if name == "profile":
+        if name in ("profile", "diagnose"):
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")
         p.set_defaults(func=func)
 

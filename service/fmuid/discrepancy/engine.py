@@ -46,6 +46,7 @@ from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
 from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
 from fmuid.discrepancy.scan import CandidateFit, augmented
 from fmuid.discrepancy.settle import settles, settling_tests
+from fmuid.discrepancy.tasks import candidate_pool
 from fmuid.discrepancy.validate import coupling_error, validation
 from fmuid.estimation.optimize import (
     FitOptions,
@@ -181,11 +182,16 @@ def diagnose_problem(
     Diagnosis
 
     """
-    opts = options
     common = augmented(problem, [])
     if common.predictor is not problem.predictor:
         problem, fit = common, None if fit is None else refit(common, fit)
-    run = Run(problem, opts, progress)
+    with candidate_pool(problem, options.workers) as mapper:
+        return _diagnose(Run(problem, options, progress, mapper), fit, test_data)
+
+
+def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) -> Diagnosis:
+    """Diagnose the run's problem (:func:`diagnose_problem`'s steps)."""
+    problem, opts = run.problem, run.opts
     if fit is None:
         fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)
     cands = study_catalogue(problem, fit.estimates)

@@ -13,7 +13,7 @@ from fmuid.discrepancy import decide
 from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.result import AddedEstimate, CandidateScore
-from fmuid.discrepancy.scan import CandidateFit, Scanner, scan
+from fmuid.discrepancy.scan import CandidateFit, Mapper, Scanner, scan, serial
 from fmuid.estimation.optimize import jacobian, make_fit_result, refine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
@@ -55,8 +55,15 @@ def added_estimates(
 class Run:
     """State of one diagnosis: the problem, options, progress and the simulations spent."""
 
-    def __init__(self, problem: Problem, opts: DiagnoseOptions, progress: ProgressCallback | None):
+    def __init__(
+        self,
+        problem: Problem,
+        opts: DiagnoseOptions,
+        progress: ProgressCallback | None,
+        mapper: Mapper = serial,
+    ):
         self.problem = problem
+        self.mapper = mapper
         self.opts = opts
         self.progress = progress
         self.t0 = time.perf_counter()
@@ -88,7 +95,7 @@ class Run:
 
         fits = scan(
             scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
-            options=self.opts.fit, stage=stage, on_candidate=seen,
+            options=self.opts.fit, stage=stage, on_candidate=seen, mapper=self.mapper,
         )  # fmt: skip
         return fits, decide.min_p(fits, self.problem.spec.seed + stage)
 
