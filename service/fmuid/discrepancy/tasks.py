@@ -4,9 +4,10 @@ The local pool is the one the profiles use (:func:`fmuid.profiling.worker_pool.l
 forkserver workers that never import the caller's script and stop at once on Ctrl-C); each
 worker parses the FMU once, from the file and checksum the owner hands it, and keeps its
 instance warm across the diagnosis. A screen or a fit depends only on its candidate and the
-fitted model it augments, so the results are those of one process. On a ``dask.distributed`` cluster each task carries
-the FMU's bytes, as a profile branch does (:class:`fmuid.profiling.parallel.PickledTask`): a
-worker that cannot see the file parses a local copy once.
+fitted model it augments, so the results are those of one process. On a ``dask.distributed``
+cluster each task carries the FMU's bytes, as a profile branch does
+(:class:`fmuid.profiling.parallel.PickledTask`): a worker that cannot see the file parses a
+local copy once.
 """
 
 from __future__ import annotations
