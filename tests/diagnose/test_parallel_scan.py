@@ -30,21 +30,42 @@ def _offset_record():  # type: ignore[no-untyped-def]
     )
 
 
+SPEC = spec_from_json(
+    '{"parameters": {"k": {"start": 4, "lower": 0.1, "upper": 20}, "b": {"start": 1,'
+    ' "lower": 0.1, "upper": 10}}, "fixed": {"m": 1.1}, "inputs": ["f"],'
+    ' "outputs": {"x": {"sigma": 0.005}}, "seed": 0, "global_search": false}'
+)
+
+
+def _comparable(result: dict) -> dict:  # type: ignore[type-arg]
+    """A result without what differs between runs (cost, provenance)."""
+    return {k: v for k, v in result.items() if k not in ("cost", "provenance")}
+
+
 @pytest.mark.slow
 def test_two_workers_give_the_same_diagnosis(msd_fmu: Path) -> None:
-    spec = spec_from_json(
-        '{"parameters": {"k": {"start": 4, "lower": 0.1, "upper": 20}, "b": {"start": 1,'
-        ' "lower": 0.1, "upper": 10}}, "fixed": {"m": 1.1}, "inputs": ["f"],'
-        ' "outputs": {"x": {"sigma": 0.005}}, "seed": 0, "global_search": false}'
-    )
     data = [_offset_record()]
     results = []
     for workers in (1, 2):
         opts = DiagnoseOptions(workers=workers, absorbed=False, discriminate=False)
-        out = diagnose(msd_fmu, data, spec, options=opts).to_dict()
-        results.append({k: v for k, v in out.items() if k not in ("cost", "provenance")})
+        results.append(_comparable(diagnose(msd_fmu, data, SPEC, options=opts).to_dict()))
     one, two = results
     assert one["mismatch"] and one["effect"] == "input_offset"
     lo, hi = one["added_parameters"]["offset_f"]["ci"]
     assert lo <= OFFSET <= hi
     assert one == two
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_local_diagnosis(msd_fmu: Path) -> None:
+    from distributed import Client, LocalCluster
+
+    data = [_offset_record()]
+    opts = DiagnoseOptions(absorbed=False, discriminate=False)
+    local = diagnose(msd_fmu, data, SPEC, options=opts).to_dict()
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        with Client(cluster) as client:
+            remote = diagnose(msd_fmu, data, SPEC, options=opts, executor=client).to_dict()
+    assert _comparable(remote) == _comparable(local)

@@ -160,6 +160,7 @@ def diagnose_problem(
     options: DiagnoseOptions = DiagnoseOptions(),
     progress: ProgressCallback | None = None,
     test_data: Sequence[Experiment] = (),
+    executor: Any = None,
 ) -> Diagnosis:
     """Diagnose the model mismatch of an estimation problem (see the module docstring).
 
@@ -176,6 +177,9 @@ def diagnose_problem(
     test_data
         Held-out experiments: the base and every augmented model are simulated on them from
         their fitted parameters (``validation`` in the result).
+    executor
+        A ``dask.distributed.Client``: the candidate scan and the profiles run as tasks on its
+        workers instead of ``options.workers`` local processes.
 
     Returns
     -------
@@ -185,8 +189,9 @@ def diagnose_problem(
     common = augmented(problem, [])
     if common.predictor is not problem.predictor:
         problem, fit = common, None if fit is None else refit(common, fit)
-    with candidate_pool(problem, options.workers) as mapper:
-        return _diagnose(Run(problem, options, progress, mapper), fit, test_data)
+    with candidate_pool(problem, options.workers, executor) as mapper:
+        run = Run(problem, options, progress, mapper, executor)
+        return _diagnose(run, fit, test_data)
 
 
 def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) -> Diagnosis:
@@ -267,7 +272,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     added = [p for c in applied for p in c.parameters]
     prof = profile_problem(
         aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk,
-        confidence=opts.ci_confidence,
+        confidence=opts.ci_confidence, executor=run.executor,
     )  # fmt: skip
     run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -61,9 +61,11 @@ class Run:
         opts: DiagnoseOptions,
         progress: ProgressCallback | None,
         mapper: Mapper = serial,
+        executor: Any = None,
     ):
         self.problem = problem
         self.mapper = mapper
+        self.executor = executor
         self.opts = opts
         self.progress = progress
         self.t0 = time.perf_counter()
@@ -102,7 +104,7 @@ class Run:
     def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
         """Count a profile: its problem's simulations, and those of worker processes."""
         self.made[id(problem)] = problem
-        if self.opts.workers != 1:
+        if self.opts.workers != 1 or self.executor is not None:
             self.extra += spent_elsewhere
 
     def cost(self) -> Cost:
@@ -118,6 +120,7 @@ def tie_intervals(run: Run, tie: CandidateFit) -> dict[str, object]:
         tie_fit,
         only=list(tie.candidate.names),
         workers=run.opts.workers,
+        executor=run.executor,
         options=run.opts.walk,
         confidence=run.opts.ci_confidence,
     )

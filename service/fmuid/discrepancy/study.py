@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from fmuid import provenance
 from fmuid.data import Experiment, Spec
@@ -25,6 +26,7 @@ def diagnose(
     problem: Problem | None = None,
     test_data: Sequence[Experiment] = (),
     start: Start | None = None,
+    executor: Any = None,
 ) -> Diagnosis:
     """Fit the spec's model, test its residuals and explain a mismatch by left-out physics.
 
@@ -51,6 +53,9 @@ def diagnose(
         Where the fit begins (:func:`fmuid.formats.start.start_at`): an earlier fit or
         profile result (the object, or its JSON file: its estimates, without the global
         search) or an ``.ssv`` file; as the CLI's ``--start``. Ignored with ``problem``.
+    executor
+        A ``dask.distributed.Client``: the candidate scan and the profiles run on its workers
+        (the same results as one process).
 
     Returns
     -------
@@ -67,7 +72,9 @@ def diagnose(
     if test_data:
         model = problem.model
         check_test_data(spec, model.parameters, model.inputs, model.outputs, test_data)
-    result = diagnose_problem(problem, options=options, progress=progress, test_data=test_data)
+    result = diagnose_problem(
+        problem, options=options, progress=progress, test_data=test_data, executor=executor
+    )
     held = [e.name for e in test_data]
     return provenance.record(
         result, fmu_sha256=problem.model.sha256, spec=spec, experiments=[*experiments, *test_data],
