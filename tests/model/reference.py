@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.linalg import expm
 
 NOMINAL = {
     "C_atf": 220000.0, "C_atr": 486000.0, "C_air": 167000.0,
@@ -115,3 +116,40 @@ def tractor_reference(
         "x_ic": xt - c * np.cos(pt) - d * np.cos(pi),
         "y_ic": yt - c * np.sin(pt) - d * np.sin(pi),
     }  # fmt: skip
+
+
+def tractor_yaw_rates_exact(
+    params: dict[str, float],
+    input_time: np.ndarray,
+    input_delta: np.ndarray,
+    output_time: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """Yaw rates of the linear model (no extra physics) by the exact matrix exponential.
+
+    Between breakpoints the steer is linear in time, so the state ``x`` with the steer ``u`` and
+    its slope ``r`` appended obeys ``s' = F s`` with constant ``F``, and ``expm(F h)`` steps it
+    exactly. The same answer as :func:`tractor_reference` (to ~1e-10) in a fraction of its time.
+    """
+    m, n, pvec = tractor_matrices({**NOMINAL, **params})
+    m_inv = np.linalg.inv(m)
+    f = np.zeros((10, 10))
+    f[:8, :8] = m_inv @ n
+    f[:8, 8] = m_inv @ pvec
+    f[8, 9] = 1.0
+    steps: dict[float, np.ndarray] = {}
+    grid = np.unique(np.concatenate([input_time, output_time]))
+    grid = grid[grid <= output_time[-1]]
+    state = np.zeros(10)
+    states = {float(grid[0]): state[:8]}
+    for t0, t1 in zip(grid[:-1], grid[1:], strict=True):
+        j = min(np.searchsorted(input_time, t0, side="right") - 1, input_time.size - 2)
+        rate = (input_delta[j + 1] - input_delta[j]) / (input_time[j + 1] - input_time[j])
+        state[8] = input_delta[j] + rate * (t0 - input_time[j])
+        state[9] = rate
+        h = round(float(t1 - t0), 12)
+        if h not in steps:
+            steps[h] = expm(f * h)
+        state = steps[h] @ state
+        states[float(t1)] = state[:8]
+    x = np.array([states[float(t)] for t in output_time])
+    return {"gam_t": x[:, 1], "gam_i": x[:, 2]}
