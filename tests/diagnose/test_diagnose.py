@@ -77,9 +77,9 @@ def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
 @pytest.mark.parametrize(
     ("effect", "parameter", "magnitude", "seed", "absorbed"),
     [
-        ("output_lag", "tau_outputs", 0.04, 8, True),
+        ("output_lag", "tau_outputs", 0.04, 8, False),
         ("input_offset", "offset_delta", 0.0004, 8, False),
-        ("tire_saturation", "alpha_sat", 0.09, 5, False),
+        ("tire_saturation", "alpha_sat", 0.09, 5, True),
         ("side_slope", "slope", 0.004, 8, False),
     ],
 )
@@ -89,7 +89,7 @@ def test_concealed_effect_is_found_named_and_sized(
     """Each effect is found, named and sized.
 
     The re-profiles of the original parameters (the dearest stage, which changes nothing else in
-    the result) are checked on one effect.
+    the result) are checked on one effect, the one where they cost least.
     """
     case = ft.make_case(effect, magnitude, seed=seed, rate=5.0)
     options = DiagnoseOptions(absorbed=absorbed)
