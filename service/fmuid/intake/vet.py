@@ -26,10 +26,11 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fmuid.data import InputLimits, Spec, check_against_model, load_experiment, spec_from_json
+from fmuid.data import InputLimits, Spec, load_experiment, spec_from_json
 from fmuid.data.checks import check_test_data
 from fmuid.data.limits import over_limit
 from fmuid.errors import FmuidError, SpecError
+from fmuid.estimation.check import check_study
 from fmuid.intake.fmucheck import FmuLimits, check_fmu
 from fmuid.jobs.reaper import become_subreaper, kill_tree, reap_children
 from fmuid.jobs.records import TEST_DATA
@@ -145,13 +146,10 @@ def vet(task: VetTask) -> dict[str, Any]:
         if task.space_file is not None:
             _check_design(workdir / task.space_file, spec, model, input_limits)
             return {"ok": True, "model_name": model.model_name}
-        wrong_interface = model.interface_problem(spec.interface)
-        if wrong_interface:
-            return {"ok": False, "status": 422, "detail": f"spec: interface: {wrong_interface}"}
         experiments = [
             load_experiment(workdir / "data" / name, input_limits) for name in task.data_names
         ]
-        check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
+        model = check_study(model, spec, experiments)
         tests = [load_experiment(workdir / TEST_DATA / n, input_limits) for n in task.test_names]
         check_test_data(spec, model.parameters, model.inputs, model.outputs, tests)
     except FmuidError as exc:
