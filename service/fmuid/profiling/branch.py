@@ -99,7 +99,7 @@ def settle_branch(
         Called with the number of walk points done after each point.
     jacobian
         The fit's Jacobian at the optimum (``FitResult.jacobian``), if known (the walk's
-        first re-fit starts from it).
+        first re-fit starts from it, along the path's tangent).
 
     Returns
     -------

@@ -31,7 +31,13 @@ class BranchRefit:
     jacobian
         The fit's Jacobian at the optimum (of the weighted outputs, the negative of the
         residuals'; all parameters, fitted coordinates), if known: the first re-fit starts from
-        its columns.
+        its columns, and it gives the path's tangent there.
+
+    Attributes
+    ----------
+    tangent
+        How all parameters move along the profile per unit of the profiled one at the optimum
+        (the Gauss-Newton re-fit of the others), or ``None`` without ``jacobian``.
 
     """
 
@@ -43,8 +49,12 @@ class BranchRefit:
         self.free = np.ones(problem.n_free, bool)
         self.free[index] = False
         self.jac: np.ndarray | None = None
+        self.tangent: np.ndarray | None = None
         if jacobian is not None and np.all(np.isfinite(jacobian)):
             self.jac = -jacobian[:, self.free]
+            self.tangent = np.zeros(problem.n_free)
+            self.tangent[index] = 1.0
+            self.tangent[self.free] = np.linalg.lstsq(self.jac, jacobian[:, index], rcond=None)[0]
 
     def __call__(self, z0: np.ndarray) -> tuple[np.ndarray, float]:
         """Re-fit from ``z0`` (all parameters, fitted coordinates); return the point and chi2.

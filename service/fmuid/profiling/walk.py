@@ -56,7 +56,7 @@ class WalkOptions:
     margin: float = 0.0
     min_step: float = 1e-4
     max_step: float = 0.08
-    max_rise: float = 3.0
+    max_rise: float = 4.0
     max_points: int = 60
     max_failures: int = 3
     better_tol: float = 1e-3
@@ -96,9 +96,10 @@ def walk(
     """Walk parameter ``index`` outwards in ``direction`` (+1 or -1) from the end of ``path``.
 
     At each point the profiled parameter is fixed and the others are re-fitted, warm-started
-    from a linear extrapolation of their path over the last two points. The step aims at a
-    chi2 rise of ``rise_per_step * threshold``, starting from ``step`` and adapted from the
-    rise actually seen; a step that overshoots is retried shorter.
+    from a linear extrapolation of their path over the last two points (from the optimum, along
+    the path's tangent when the re-fits know it). The step aims at a chi2 rise of
+    ``rise_per_step * threshold``, starting from ``step`` and adapted from the rise actually
+    seen; a step that overshoots is retried shorter.
 
     Parameters
     ----------
@@ -146,7 +147,7 @@ def walk(
         zi = float(np.clip(zi, lo, hi))
         if abs(zi - last_ok.z[index]) < 1e-12 * max(1.0, span):
             break
-        guess = _extrapolate(path, index, zi)
+        guess = _extrapolate(path, index, zi, refit.tangent)
         guess = np.clip(guess, problem.z_lower, problem.z_upper)
         try:
             z, chi2 = refit(guess)
@@ -198,11 +199,18 @@ def walk(
     return points, None
 
 
-def _extrapolate(path: list[WalkPoint], index: int, zi: float) -> np.ndarray:
-    """Linear extrapolation of all parameters along the path to ``z[index] = zi``."""
+def _extrapolate(
+    path: list[WalkPoint], index: int, zi: float, tangent: np.ndarray | None = None
+) -> np.ndarray:
+    """Linear extrapolation of all parameters along the path to ``z[index] = zi``.
+
+    From the optimum alone, along ``tangent`` (the path's tangent there) when it is known.
+    """
     last = path[-1].z
     guess = last.copy()
-    if len(path) >= 2:
+    if len(path) == 1 and tangent is not None:
+        guess = last + tangent * (zi - last[index])
+    elif len(path) >= 2:
         prev = path[-2].z
         dz = last[index] - prev[index]
         if abs(dz) > 0:
