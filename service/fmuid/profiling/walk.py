@@ -56,7 +56,7 @@ class WalkOptions:
     margin: float = 0.0
     min_step: float = 1e-4
     max_step: float = 0.08
-    max_rise: float = 4.0
+    max_rise: float = 3.0
     max_points: int = 60
     max_failures: int = 3
     better_tol: float = 1e-3
