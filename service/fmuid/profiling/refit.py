@@ -9,6 +9,9 @@ from fmuid.errors import FmuError
 from fmuid.estimation.optimize import FAILED_RESIDUAL, FitOptions, refine, safe_residuals
 from fmuid.estimation.problem import Problem
 
+#: Jacobians after a fresh one that are Broyden updates of it rather than finite differences.
+BROYDEN = 0
+
 
 class BranchRefit:
     """Re-fit the other parameters with parameter ``index`` fixed, reusing Jacobians.
@@ -82,14 +85,22 @@ class BranchRefit:
             return last["f"]
 
         handed = [self.jac]
+        prev: dict[str, np.ndarray] = {}
+        streak = [0]
 
         def jac(x: np.ndarray) -> np.ndarray:
+            f = last["f"] if np.array_equal(last.get("x"), x) else fun(x)
             if handed[0] is not None:
                 j, handed[0] = handed[0], None
-                return j
-            f = last["f"] if np.array_equal(last.get("x"), x) else fun(x)
-            self.jac = self._differences(fun, x, f, lo, hi)
-            return self.jac
+            elif prev and streak[0] < BROYDEN:
+                s = x - prev["x"]
+                j = prev["j"] + np.outer(f - prev["f"] - prev["j"] @ s, s) / float(s @ s)
+                streak[0] += 1
+            else:
+                j = self.jac = self._differences(fun, x, f, lo, hi)
+                streak[0] = 0
+            prev.update(x=x.copy(), f=f, j=j)
+            return j
 
         res = least_squares(
             fun, x0, jac=jac, bounds=(lo, hi), method="trf", ftol=self.options.ftol,
