@@ -61,7 +61,6 @@ def settle_branch(
     thorough: bool = False,
     seed: int = 0,
     on_point: Callable[[int], None] | None = None,
-    jacobian: np.ndarray | None = None,
 ) -> BranchResult:
     """Walk one branch, locate its CI ends exactly and check that it follows the lowest valley.
 
@@ -97,9 +96,6 @@ def settle_branch(
         Seed of the diverse starts.
     on_point
         Called with the number of walk points done after each point.
-    jacobian
-        The fit's Jacobian at the optimum (``FitResult.jacobian``), if known (the walk's
-        first re-fit starts from it, along the path's tangent).
 
     Returns
     -------
@@ -110,10 +106,11 @@ def settle_branch(
     thr = thresholds["simultaneous"]
     span = float(problem.z_upper[index] - problem.z_lower[index])
     estimate = WalkPoint(z_hat.copy(), chi2_hat)
-    refit = BranchRefit(problem, index, options.refit, jacobian)
+    refit = BranchRefit(problem, index, options.refit)
     points, better = walk(
         problem, [estimate], chi2_hat, index, direction, thr,
         first_step(sd_z, thr, span, options), options, on_point, refit,
+        landings=[t for t in thresholds.values() if t < thr],
     )  # fmt: skip
     counts = _Counts()
     ends: dict[str, End] = {}

@@ -197,12 +197,11 @@ def _walk_all(
         BranchTask(
             problem, z_hat, fit.chi2, problem.names.index(n), d, thr["simultaneous"], sd[n],
             options, pointwise=thr["pointwise"], valleys=tuple(valleys), seed=seed,
-            jacobian=fit.jacobian,
         )
         for n in names
         for d in (-1, 1)
     ]  # fmt: skip
-    expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
+    expected = int(np.ceil(np.sqrt((1.0 + options.margin) / options.rise_per_step))) + 2
     done: dict[tuple[int, int], int] = {}
 
     def on_point(index: int, direction: int, n: int) -> None:

@@ -46,7 +46,6 @@ class BranchTask:
     valleys: tuple[np.ndarray, ...] = ()
     thorough: bool = False
     seed: int = 0
-    jacobian: np.ndarray | None = None
 
     def walk(self, on_point: Callable[[int], None]) -> BranchResult:
         """Walk and settle the branch, calling ``on_point`` with the walk points done."""
@@ -66,7 +65,6 @@ class BranchTask:
             thorough=self.thorough,
             seed=self.seed,
             on_point=on_point,
-            jacobian=self.jacobian,
         )
 
 

@@ -9,9 +9,6 @@ from fmuid.errors import FmuError
 from fmuid.estimation.optimize import FAILED_RESIDUAL, FitOptions, refine, safe_residuals
 from fmuid.estimation.problem import Problem
 
-#: Jacobians after a fresh one that are Broyden updates of it rather than finite differences.
-BROYDEN = 0
-
 
 class BranchRefit:
     """Re-fit the other parameters with parameter ``index`` fixed, reusing Jacobians.
@@ -31,33 +28,15 @@ class BranchRefit:
         The fixed (profiled) parameter.
     options
         Tolerances and finite-difference step of the re-fits.
-    jacobian
-        The fit's Jacobian at the optimum (of the weighted outputs, the negative of the
-        residuals'; all parameters, fitted coordinates), if known: the first re-fit starts from
-        its columns, and it gives the path's tangent there.
-
-    Attributes
-    ----------
-    tangent
-        How all parameters move along the profile per unit of the profiled one at the optimum
-        (the Gauss-Newton re-fit of the others), or ``None`` without ``jacobian``.
 
     """
 
-    def __init__(
-        self, problem: Problem, index: int, options: FitOptions, jacobian: np.ndarray | None = None
-    ) -> None:
+    def __init__(self, problem: Problem, index: int, options: FitOptions) -> None:
         self.problem = problem
         self.options = options
         self.free = np.ones(problem.n_free, bool)
         self.free[index] = False
         self.jac: np.ndarray | None = None
-        self.tangent: np.ndarray | None = None
-        if jacobian is not None and np.all(np.isfinite(jacobian)):
-            self.jac = -jacobian[:, self.free]
-            self.tangent = np.zeros(problem.n_free)
-            self.tangent[index] = 1.0
-            self.tangent[self.free] = np.linalg.lstsq(self.jac, jacobian[:, index], rcond=None)[0]
 
     def __call__(self, z0: np.ndarray) -> tuple[np.ndarray, float]:
         """Re-fit from ``z0`` (all parameters, fitted coordinates); return the point and chi2.
@@ -85,22 +64,14 @@ class BranchRefit:
             return last["f"]
 
         handed = [self.jac]
-        prev: dict[str, np.ndarray] = {}
-        streak = [0]
 
         def jac(x: np.ndarray) -> np.ndarray:
-            f = last["f"] if np.array_equal(last.get("x"), x) else fun(x)
             if handed[0] is not None:
                 j, handed[0] = handed[0], None
-            elif prev and streak[0] < BROYDEN:
-                s = x - prev["x"]
-                j = prev["j"] + np.outer(f - prev["f"] - prev["j"] @ s, s) / float(s @ s)
-                streak[0] += 1
-            else:
-                j = self.jac = self._differences(fun, x, f, lo, hi)
-                streak[0] = 0
-            prev.update(x=x.copy(), f=f, j=j)
-            return j
+                return j
+            f = last["f"] if np.array_equal(last.get("x"), x) else fun(x)
+            self.jac = self._differences(fun, x, f, lo, hi)
+            return self.jac
 
         res = least_squares(
             fun, x0, jac=jac, bounds=(lo, hi), method="trf", ftol=self.options.ftol,

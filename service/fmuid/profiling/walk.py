@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,6 +12,7 @@ from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.checks import CheckOptions
+from fmuid.profiling.ends import rise_root
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.refit import BranchRefit
 
@@ -25,13 +26,17 @@ class WalkOptions:
     Attributes
     ----------
     rise_per_step
-        Target chi2 rise per step, as a fraction of the simultaneous threshold.
+        Chi2 rise of the first step from the optimum, as a fraction of the simultaneous
+        threshold: the walk steps in equal rises of the root ``sqrt(chi2 - chi2_hat)`` (linear
+        in the parameter where the profile is parabolic), each landing just past a threshold
+        it would otherwise step over.
     margin
         Walk on until the profile exceeds the simultaneous threshold times ``1 + margin``.
     min_step, max_step
         Step limits, as fractions of the parameter's range in fitted coordinates.
     max_rise
-        A step whose chi2 rise exceeds this multiple of the target is retried shorter.
+        A step whose rise of the root exceeds ``sqrt(max_rise)`` times the target is retried
+        shorter.
     max_points
         Cap on points per branch.
     max_failures
@@ -72,10 +77,13 @@ class WalkOptions:
 
 #: Points walked past the first crossing when ``overshoot`` is set.
 OVERSHOOT_STEPS = 6
+#: A step that would pass a threshold lands where the root of the rise is this factor of the
+#: threshold's root (the crossing is then bracketed closely, and located in one or two re-fits).
+LANDING = 1.05
 
 
 def first_step(sd_z: float, threshold: float, span: float, options: WalkOptions) -> float:
-    """First step from the estimate: the quadratic (Fisher) guess for the target rise."""
+    """First step from the estimate: the quadratic (Fisher) guess for the first rise."""
     target = options.rise_per_step * threshold
     step = np.sqrt(target) * sd_z if np.isfinite(sd_z) else options.max_step * span
     return float(np.clip(step, options.min_step * span, options.max_step * span))
@@ -92,14 +100,16 @@ def walk(
     options: WalkOptions = WalkOptions(),
     on_point: Callable[[int], None] | None = None,
     refit: BranchRefit | None = None,
+    landings: Sequence[float] = (),
 ) -> tuple[list[WalkPoint], WalkPoint | None]:
     """Walk parameter ``index`` outwards in ``direction`` (+1 or -1) from the end of ``path``.
 
     At each point the profiled parameter is fixed and the others are re-fitted, warm-started
-    from a linear extrapolation of their path over the last two points (from the optimum, along
-    the path's tangent when the re-fits know it). The step aims at a chi2 rise of
-    ``rise_per_step * threshold``, starting from ``step`` and adapted from the rise actually
-    seen; a step that overshoots is retried shorter.
+    from a linear extrapolation of their path over the last two points. Each step aims at a
+    rise of the root ``r = sqrt(chi2 - chi2_hat)`` of ``sqrt(rise_per_step * threshold)``
+    (``step`` is taken to make it, later steps follow the slope of ``r`` over the last step), or
+    just past the next of ``threshold`` and ``landings`` when it would step over it; a step
+    that rises much more is retried shorter.
 
     Parameters
     ----------
@@ -121,6 +131,8 @@ def walk(
         Called with the number of points done after each point.
     refit
         The branch's re-fits (they hand their Jacobians on); a new one by default.
+    landings
+        Other chi2 rises (e.g. the pointwise threshold) the walk lands just past.
 
     Returns
     -------
@@ -132,7 +144,9 @@ def walk(
     lo, hi = problem.z_lower[index], problem.z_upper[index]
     span = hi - lo
     refit = refit or BranchRefit(problem, index, options.refit)
-    target = options.rise_per_step * threshold
+    target = np.sqrt(options.rise_per_step * threshold)
+    roots = sorted(np.sqrt([threshold, *landings]))
+    slope = target / step
     path = list(path)
     points: list[WalkPoint] = []
     failures = 0
@@ -147,7 +161,7 @@ def walk(
         zi = float(np.clip(zi, lo, hi))
         if abs(zi - last_ok.z[index]) < 1e-12 * max(1.0, span):
             break
-        guess = _extrapolate(path, index, zi, refit.tangent)
+        guess = _extrapolate(path, index, zi)
         guess = np.clip(guess, problem.z_lower, problem.z_upper)
         try:
             z, chi2 = refit(guess)
@@ -169,12 +183,13 @@ def walk(
         failures = 0
         if point.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
             return points, point
-        rise = point.chi2 - last_ok.chi2
-        steep = rise > options.max_rise * target and step > options.min_step * span
+        r_last, r_new = rise_root(last_ok.chi2, chi2_hat), rise_root(point.chi2, chi2_hat)
+        rise = r_new - r_last
+        steep = rise > np.sqrt(options.max_rise) * target and step > options.min_step * span
         if reach is None and steep and retries < 8:
             points.pop()
             retries += 1
-            step = max(step * max(np.sqrt(target / rise), 0.1), options.min_step * span)
+            step = max(step * max(target / rise, 0.1), options.min_step * span)
             continue
         retries = 0
         path.append(point)
@@ -190,27 +205,28 @@ def walk(
             continue
         if reach is not None:
             continue
-        factor = np.sqrt(target / max(rise, 1e-12 * target)) if rise > 0 else 2.0
+        aim = r_new + target
+        ahead = [LANDING * root for root in roots if root > r_new]
+        if ahead and ahead[0] < aim:
+            aim = ahead[0]
+        if rise > 0:
+            slope = rise / step
+        nxt = (aim - r_new) / slope if rise > 0 else 2.0 * step
         step = float(
             np.clip(
-                step * np.clip(factor, 0.5, 2.0), options.min_step * span, options.max_step * span
+                np.clip(nxt, 0.1 * step, 2.0 * step),
+                options.min_step * span,
+                options.max_step * span,
             )
         )
     return points, None
 
 
-def _extrapolate(
-    path: list[WalkPoint], index: int, zi: float, tangent: np.ndarray | None = None
-) -> np.ndarray:
-    """Linear extrapolation of all parameters along the path to ``z[index] = zi``.
-
-    From the optimum alone, along ``tangent`` (the path's tangent there) when it is known.
-    """
+def _extrapolate(path: list[WalkPoint], index: int, zi: float) -> np.ndarray:
+    """Linear extrapolation of all parameters along the path to ``z[index] = zi``."""
     last = path[-1].z
     guess = last.copy()
-    if len(path) == 1 and tangent is not None:
-        guess = last + tangent * (zi - last[index])
-    elif len(path) >= 2:
+    if len(path) >= 2:
         prev = path[-2].z
         dz = last[index] - prev[index]
         if abs(dz) > 0:
