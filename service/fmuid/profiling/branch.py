@@ -11,7 +11,6 @@ from fmuid.estimation.problem import Problem
 from fmuid.profiling.checks import basins, diverse_starts, jumps, refit_from
 from fmuid.profiling.ends import End, locate
 from fmuid.profiling.points import WalkPoint
-from fmuid.profiling.refit import BranchRefit
 from fmuid.profiling.result import ProfileQuality
 from fmuid.profiling.walk import WalkOptions, first_step, walk
 
@@ -106,11 +105,9 @@ def settle_branch(
     thr = thresholds["simultaneous"]
     span = float(problem.z_upper[index] - problem.z_lower[index])
     estimate = WalkPoint(z_hat.copy(), chi2_hat)
-    refit = BranchRefit(problem, index, options.refit)
     points, better = walk(
         problem, [estimate], chi2_hat, index, direction, thr,
-        first_step(sd_z, thr, span, options), options, on_point, refit,
-        landings=[t for t in thresholds.values() if t < thr],
+        first_step(sd_z, thr, span, options), options, on_point,
     )  # fmt: skip
     counts = _Counts()
     ends: dict[str, End] = {}
@@ -124,7 +121,7 @@ def settle_branch(
         ends = {
             kind: locate(
                 problem, index, chi2_hat, float(z_hat[index]), t, side, options.refit,
-                options.end_tolerance, outermost=options.overshoot > 0, refit=refit,
+                options.end_tolerance, outermost=options.overshoot > 0,
             )
             for kind, t in thresholds.items()
         }  # fmt: skip
@@ -170,9 +167,7 @@ def settle_branch(
             counts.unsettled.append("a lower valley was still found after the last re-walk")
             break
         counts.rewalks += 1
-        points, better = _rewalk(
-            problem, side, lower, chi2_hat, index, direction, thr, options, refit
-        )
+        points, better = _rewalk(problem, side, lower, chi2_hat, index, direction, thr, options)
     for kind, end in ends.items():
         if not end.settled:
             counts.unsettled.append(f"the {kind} end was not located to the tolerance")
@@ -232,7 +227,6 @@ def _rewalk(
     direction: int,
     threshold: float,
     options: WalkOptions,
-    refit: BranchRefit,
 ) -> tuple[list[WalkPoint], WalkPoint | None]:
     """Re-walk inwards from a lower valley while it stays lower, then walk on outwards."""
     z_hat_i = float(side[0].z[index])
@@ -253,7 +247,5 @@ def _rewalk(
         prev = q
     good = [side[0]] + [p for p in inner if p.ok] + [lower]
     step = abs(good[-1].z[index] - good[-2].z[index]) or options.min_step
-    more, better = walk(
-        problem, good, chi2_hat, index, direction, threshold, step, options, refit=refit
-    )
+    more, better = walk(problem, good, chi2_hat, index, direction, threshold, step, options)
     return inner + [lower] + more, better

@@ -8,10 +8,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fmuid.errors import FmuidError
-from fmuid.estimation.optimize import FitOptions
+from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.points import WalkPoint
-from fmuid.profiling.refit import BranchRefit
 
 #: Most re-fits spent locating one crossing.
 MAX_REFITS = 12
@@ -84,7 +83,6 @@ def locate(
     options: FitOptions,
     tolerance: float = 1e-3,
     outermost: bool = False,
-    refit: BranchRefit | None = None,
 ) -> End:
     """Locate the crossing of ``chi2_hat + threshold`` on one side by root-finding on re-fits.
 
@@ -115,8 +113,6 @@ def locate(
     outermost
         Locate the outermost crossing of the walked points rather than the first (a non-smooth
         objective); ``beyond`` tells whether the last good point is back under the threshold.
-    refit
-        The branch's re-fits (they hand their Jacobians on); a new one by default.
 
     Returns
     -------
@@ -127,8 +123,7 @@ def locate(
     pair = bracket(side, index, chi2_hat, threshold, outermost)
     if pair is None:
         return End(None)
-    refit = refit or BranchRefit(problem, index, options)
-    end = _root(refit, index, chi2_hat, z_hat_i, threshold, pair, tolerance)
+    end = _root(problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance)
     ok = [p for p in side if p.error is None and np.isfinite(p.chi2)]
     if outermost and ok[-1].chi2 - chi2_hat < threshold:
         return replace(end, beyond=True)
@@ -136,17 +131,20 @@ def locate(
 
 
 def _root(
-    refit: BranchRefit,
+    problem: Problem,
     index: int,
     chi2_hat: float,
     z_hat_i: float,
     threshold: float,
     pair: tuple[WalkPoint, WalkPoint],
+    options: FitOptions,
     tolerance: float,
 ) -> End:
     """Regula falsi (Illinois) on re-fits inside the bracketing ``pair`` (see :func:`locate`)."""
     a, b = pair
     target = np.sqrt(threshold)
+    free = np.ones(problem.n_free, bool)
+    free[index] = False
     za, zb = float(a.z[index]), float(b.z[index])
     fa, fb = rise_root(a.chi2, chi2_hat) - target, rise_root(b.chi2, chi2_hat) - target
     best = b
@@ -159,7 +157,7 @@ def _root(
         start = (1.0 - w) * a.z + w * b.z
         start[index] = guess
         try:
-            z, chi2 = refit(start)
+            z, chi2, _ = refine(problem, start, free=free, options=options)
         except FmuidError:
             return End(guess, best, refits + 1, settled=False)
         refits += 1

@@ -201,7 +201,7 @@ def _walk_all(
         for n in names
         for d in (-1, 1)
     ]  # fmt: skip
-    expected = int(np.ceil(np.sqrt((1.0 + options.margin) / options.rise_per_step))) + 2
+    expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
     done: dict[tuple[int, int], int] = {}
 
     def on_point(index: int, direction: int, n: int) -> None:

@@ -3,18 +3,16 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from fmuid.errors import FmuidError
-from fmuid.estimation.optimize import FitOptions
+from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.checks import CheckOptions
-from fmuid.profiling.ends import rise_root
 from fmuid.profiling.points import WalkPoint
-from fmuid.profiling.refit import BranchRefit
 
 log = logging.getLogger(__name__)
 
@@ -26,17 +24,13 @@ class WalkOptions:
     Attributes
     ----------
     rise_per_step
-        Chi2 rise of the first step from the optimum, as a fraction of the simultaneous
-        threshold: the walk steps in equal rises of the root ``sqrt(chi2 - chi2_hat)`` (linear
-        in the parameter where the profile is parabolic), each landing just past a threshold
-        it would otherwise step over.
+        Target chi2 rise per step, as a fraction of the simultaneous threshold.
     margin
         Walk on until the profile exceeds the simultaneous threshold times ``1 + margin``.
     min_step, max_step
         Step limits, as fractions of the parameter's range in fitted coordinates.
     max_rise
-        A step whose rise of the root exceeds ``sqrt(max_rise)`` times the target is retried
-        shorter.
+        A step whose chi2 rise exceeds this multiple of the target is retried shorter.
     max_points
         Cap on points per branch.
     max_failures
@@ -77,13 +71,10 @@ class WalkOptions:
 
 #: Points walked past the first crossing when ``overshoot`` is set.
 OVERSHOOT_STEPS = 6
-#: A step that would pass a threshold lands where the root of the rise is this factor of the
-#: threshold's root (the crossing is then bracketed closely, and located in one or two re-fits).
-LANDING = 1.05
 
 
 def first_step(sd_z: float, threshold: float, span: float, options: WalkOptions) -> float:
-    """First step from the estimate: the quadratic (Fisher) guess for the first rise."""
+    """First step from the estimate: the quadratic (Fisher) guess for the target rise."""
     target = options.rise_per_step * threshold
     step = np.sqrt(target) * sd_z if np.isfinite(sd_z) else options.max_step * span
     return float(np.clip(step, options.min_step * span, options.max_step * span))
@@ -99,17 +90,13 @@ def walk(
     step: float,
     options: WalkOptions = WalkOptions(),
     on_point: Callable[[int], None] | None = None,
-    refit: BranchRefit | None = None,
-    landings: Sequence[float] = (),
 ) -> tuple[list[WalkPoint], WalkPoint | None]:
     """Walk parameter ``index`` outwards in ``direction`` (+1 or -1) from the end of ``path``.
 
     At each point the profiled parameter is fixed and the others are re-fitted, warm-started
-    from a linear extrapolation of their path over the last two points. Each step aims at a
-    rise of the root ``r = sqrt(chi2 - chi2_hat)`` of ``sqrt(rise_per_step * threshold)``
-    (``step`` is taken to make it, later steps follow the slope of ``r`` over the last step), or
-    just past the next of ``threshold`` and ``landings`` when it would step over it; a step
-    that rises much more is retried shorter.
+    from a linear extrapolation of their path over the last two points. The step aims at a
+    chi2 rise of ``rise_per_step * threshold``, starting from ``step`` and adapted from the
+    rise actually seen; a step that overshoots is retried shorter.
 
     Parameters
     ----------
@@ -129,10 +116,6 @@ def walk(
         Step settings.
     on_point
         Called with the number of points done after each point.
-    refit
-        The branch's re-fits (they hand their Jacobians on); a new one by default.
-    landings
-        Other chi2 rises (e.g. the pointwise threshold) the walk lands just past.
 
     Returns
     -------
@@ -143,10 +126,9 @@ def walk(
     """
     lo, hi = problem.z_lower[index], problem.z_upper[index]
     span = hi - lo
-    refit = refit or BranchRefit(problem, index, options.refit)
-    target = np.sqrt(options.rise_per_step * threshold)
-    roots = sorted(np.sqrt([threshold, *landings]))
-    slope = target / step
+    free = np.ones(problem.n_free, bool)
+    free[index] = False
+    target = options.rise_per_step * threshold
     path = list(path)
     points: list[WalkPoint] = []
     failures = 0
@@ -164,7 +146,7 @@ def walk(
         guess = _extrapolate(path, index, zi)
         guess = np.clip(guess, problem.z_lower, problem.z_upper)
         try:
-            z, chi2 = refit(guess)
+            z, chi2, _ = refine(problem, guess, free=free, options=options.refit)
         except FmuidError as exc:
             z, chi2 = guess, float("nan")
             points.append(WalkPoint(guess, chi2, str(exc)))
@@ -183,13 +165,12 @@ def walk(
         failures = 0
         if point.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
             return points, point
-        r_last, r_new = rise_root(last_ok.chi2, chi2_hat), rise_root(point.chi2, chi2_hat)
-        rise = r_new - r_last
-        steep = rise > np.sqrt(options.max_rise) * target and step > options.min_step * span
+        rise = point.chi2 - last_ok.chi2
+        steep = rise > options.max_rise * target and step > options.min_step * span
         if reach is None and steep and retries < 8:
             points.pop()
             retries += 1
-            step = max(step * max(target / rise, 0.1), options.min_step * span)
+            step = max(step * max(np.sqrt(target / rise), 0.1), options.min_step * span)
             continue
         retries = 0
         path.append(point)
@@ -205,18 +186,10 @@ def walk(
             continue
         if reach is not None:
             continue
-        aim = r_new + target
-        ahead = [LANDING * root for root in roots if root > r_new]
-        if ahead and ahead[0] < aim:
-            aim = ahead[0]
-        if rise > 0:
-            slope = rise / step
-        nxt = (aim - r_new) / slope if rise > 0 else 2.0 * step
+        factor = np.sqrt(target / max(rise, 1e-12 * target)) if rise > 0 else 2.0
         step = float(
             np.clip(
-                np.clip(nxt, 0.1 * step, 2.0 * step),
-                options.min_step * span,
-                options.max_step * span,
+                step * np.clip(factor, 0.5, 2.0), options.min_step * span, options.max_step * span
             )
         )
     return points, None
