@@ -49,16 +49,27 @@ OUTPUTS = ("i", "w")
 RATE = 1000.0
 DURATION = 1.0
 EFFECTS = (
-    "input_delay", "input_lag", "input_offset", "input_gain", "input_saturation",
-    "output_bias", "output_gain", "output_lag", "output_saturation",
-)  # fmt: skip
+    "input_delay",
+    "input_lag",
+    "input_offset",
+    "input_gain",
+    "input_saturation",
+    "output_bias",
+    "output_gain",
+    "output_lag",
+    "output_saturation",
+)
 STRENGTH = {
-    "input_delay": (0.002, 1e-5, 0.05), "input_lag": (0.002, 1e-5, 0.05),
-    "output_lag": (0.002, 1e-5, 0.05), "input_offset": (0.01, 1e-6, 0.3),
-    "output_bias": (0.01, 1e-6, 0.3), "input_gain": (0.02, 1e-5, 0.5),
-    "output_gain": (0.02, 1e-5, 0.5), "input_saturation": (0.05, 1e-4, 0.7),
+    "input_delay": (0.002, 1e-5, 0.05),
+    "input_lag": (0.002, 1e-5, 0.05),
+    "output_lag": (0.002, 1e-5, 0.05),
+    "input_offset": (0.01, 1e-6, 0.3),
+    "output_bias": (0.01, 1e-6, 0.3),
+    "input_gain": (0.02, 1e-5, 0.5),
+    "output_gain": (0.02, 1e-5, 0.5),
+    "input_saturation": (0.05, 1e-4, 0.7),
     "output_saturation": (0.05, 1e-4, 0.7),
-}  # fmt: skip
+}
 """First strength and its range per effect (strength units: see :func:`apply_effect`)."""
 LAMBDA_RANGE = (15.0, 45.0)
 ATTEMPTS = 10
@@ -93,8 +104,9 @@ class Design:
     target_lambda: float
 
 
-def foh_modes(a: np.ndarray, b: np.ndarray, c: np.ndarray, t: np.ndarray,
-              u: np.ndarray) -> np.ndarray:  # fmt: skip
+def foh_modes(
+    a: np.ndarray, b: np.ndarray, c: np.ndarray, t: np.ndarray, u: np.ndarray
+) -> np.ndarray:
     """Outputs ``c x`` of ``x' = a x + b u`` from ``x(t0) = 0``, ``u`` linear between samples.
 
     Exact on an equally spaced grid: per eigenmode ``z' = lam z + beta u`` the step is
@@ -116,8 +128,13 @@ def foh_modes(a: np.ndarray, b: np.ndarray, c: np.ndarray, t: np.ndarray,
     return np.real(np.asarray(modes).T @ (c @ vec).T)
 
 
-def motor(p: Mapping[str, float], t: np.ndarray, v: np.ndarray, lag: float = 0.0,
-          lag_output: int | None = None) -> np.ndarray:  # fmt: skip
+def motor(
+    p: Mapping[str, float],
+    t: np.ndarray,
+    v: np.ndarray,
+    lag: float = 0.0,
+    lag_output: int | None = None,
+) -> np.ndarray:
     """Current and speed (n x 2) for a voltage linear between samples, from rest.
 
     ``lag_output`` (0 or 1) is seen through a first-order sensor lag ``lag`` [s] started at
@@ -142,8 +159,9 @@ def first_order(t: np.ndarray, u: np.ndarray, tau: float) -> np.ndarray:
     return x[:, 0] + u[0]
 
 
-def apply_effect(p: Mapping[str, float], run: Run, effect: str | None, m: float,
-                 channel: str) -> np.ndarray:  # fmt: skip
+def apply_effect(
+    p: Mapping[str, float], run: Run, effect: str | None, m: float, channel: str
+) -> np.ndarray:
     """Outputs (n x 2) of ``run`` with ``effect`` of magnitude ``m`` (its catalogue unit).
 
     Delays and lags [s]; offsets and biases in the signal's unit; gains as factors; a
@@ -191,7 +209,9 @@ def magnitude_of(design: Design, strength: float) -> float:
     if effect == "input_saturation":
         return (1.0 - strength) * max(float(np.max(np.abs(r.v))) for r in design.runs)
     if effect == "output_saturation":
-        top = max(float(np.max(y)) for y in peak) if sign > 0 else min(float(np.min(y)) for y in peak)
+        top = (
+            max(float(np.max(y)) for y in peak) if sign > 0 else min(float(np.min(y)) for y in peak)
+        )
         return (1.0 - strength) * top
     return strength
 
@@ -203,7 +223,9 @@ def voltage(rng: np.random.Generator, t: np.ndarray, kind: str, peak: float) -> 
         while edges[-1] < t[-1]:
             edges.append(edges[-1] + float(rng.uniform(0.1, 0.25)))
             levels.append(float(rng.uniform(-1.0, 1.0)) * peak)
-        knots_t = np.concatenate([[t[0]], np.repeat(edges[:-1], 2) + np.tile([0, 0.01], len(edges) - 1)])
+        knots_t = np.concatenate(
+            [[t[0]], np.repeat(edges[:-1], 2) + np.tile([0, 0.01], len(edges) - 1)]
+        )
         knots_v = np.concatenate([[0.0], np.repeat(levels, 2)[1:-1]])
         return np.interp(t, knots_t, knots_v[: len(knots_t)])
     freqs = np.sort(rng.uniform(1.0, 40.0, 10))
@@ -237,8 +259,9 @@ def outputs(design: Design, p: Mapping[str, float], m: float) -> list[np.ndarray
     return [apply_effect(p, r, design.effect, m, design.channel) for r in design.runs]
 
 
-def weighted_fit(design: Design, data: list[np.ndarray], start: Mapping[str, float],
-                 with_effect: float | None) -> tuple[float, dict[str, float], float | None]:  # fmt: skip
+def weighted_fit(
+    design: Design, data: list[np.ndarray], start: Mapping[str, float], with_effect: float | None
+) -> tuple[float, dict[str, float], float | None]:
     """Least-squares fit of R, J, b (log10) and, when ``with_effect`` is a start, the magnitude.
 
     Returns the chi2, the parameters and the fitted magnitude (``None`` for the base model).
@@ -260,8 +283,17 @@ def weighted_fit(design: Design, data: list[np.ndarray], start: Mapping[str, flo
         y = [apply_effect(p, r, effect, m, design.channel) for r in design.runs]
         return np.concatenate([((d - s) / w).ravel() for d, s, w in zip(data, y, sig)])
 
-    res = least_squares(residuals, np.array(x0), bounds=(lower, upper), x_scale="jac",
-                        diff_step=1e-7, ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=300)  # fmt: skip
+    res = least_squares(
+        residuals,
+        np.array(x0),
+        bounds=(lower, upper),
+        x_scale="jac",
+        diff_step=1e-7,
+        ftol=1e-12,
+        xtol=1e-12,
+        gtol=1e-12,
+        max_nfev=300,
+    )
     params = {n: 10.0 ** float(v) for n, v in zip(names, res.x)}
     return float(res.fun @ res.fun), params, (float(res.x[-1]) if with_effect is not None else None)
 
@@ -286,7 +318,9 @@ def calibrate(design: Design) -> tuple[float, float, dict[str, float]]:
         else:
             above = (s, lam)
         if below and above:
-            slope = min(max(math.log(above[1] / below[1]) / math.log(above[0] / below[0]), 0.5), 6.0)
+            slope = min(
+                max(math.log(above[1] / below[1]) / math.log(above[0] / below[0]), 0.5), 6.0
+            )
             s_new = below[0] * (design.target_lambda / below[1]) ** (1.0 / slope)
             if not min(below[0], above[0]) < s_new < max(below[0], above[0]):
                 s_new = math.sqrt(below[0] * above[0])
@@ -303,7 +337,9 @@ def noisy(design: Design, clean: list[np.ndarray], noise: list[int]) -> list[np.
     return [y + rng.normal(0.0, 1.0, y.shape) * s for y, s in zip(clean, sig)]
 
 
-def check(design: Design, data: list[np.ndarray], m: float, start: Mapping[str, float]) -> dict[str, Any]:
+def check(
+    design: Design, data: list[np.ndarray], m: float, start: Mapping[str, float]
+) -> dict[str, Any]:
     """The operational criteria of a data set (base fit, Ljung-Box, noise band, LR p)."""
     from scipy import stats
 
@@ -316,8 +352,13 @@ def check(design: Design, data: list[np.ndarray], m: float, start: Mapping[str, 
             lb[f"{r.name}:{o}"] = ljung_box((d[:, k] - y[:, k]) / r.sigma[o])
     n = sum(d.size for d in data)
     band = chi2_band(n, len(FREE))
-    out: dict[str, Any] = {"chi2_base": chi2, "reduced_chi2": chi2 / (n - len(FREE)),
-                           "band": list(band), "ljung_box": lb, "base": base}  # fmt: skip
+    out: dict[str, Any] = {
+        "chi2_base": chi2,
+        "reduced_chi2": chi2 / (n - len(FREE)),
+        "band": list(band),
+        "ljung_box": lb,
+        "base": base,
+    }
     failures = [f"ljung_box {k} p={v:.3g}" for k, v in lb.items() if v < 0.05]
     if not band[0] <= out["reduced_chi2"] <= band[1]:
         failures.append(f"reduced chi2 {out['reduced_chi2']:.3f} outside {band}")
@@ -367,8 +408,13 @@ def make_case(effect: str | None, seed: int) -> UserCase:
         if not info["failures"] or attempt == ATTEMPTS:
             break
         rejected.append(info["failures"])
-    info.update(target_lambda=design.target_lambda, achieved_lambda=lam, attempts=attempt,
-                rejected=rejected, concealed=not info["failures"])  # fmt: skip
+    info.update(
+        target_lambda=design.target_lambda,
+        achieved_lambda=lam,
+        attempts=attempt,
+        rejected=rejected,
+        concealed=not info["failures"],
+    )
     exps = [experiment(r, d) for r, d in zip(design.runs, data)]
     return UserCase(effect, seed, m, design.channel, design.truth, exps, info)
 
@@ -380,9 +426,16 @@ def save(case: UserCase, folder: Path) -> None:
         table = np.column_stack([e.time, *e.columns.values()])
         header = ",".join(["time", *e.columns])
         np.savetxt(folder / e.name, table, delimiter=",", header=header, comments="", fmt="%.17g")
-    meta = {"version": VERSION, "effect": case.effect, "seed": case.seed,
-            "magnitude": case.magnitude, "channel": case.channel, "truth": case.truth,
-            "experiments": [e.name for e in case.experiments], "info": case.info}  # fmt: skip
+    meta = {
+        "version": VERSION,
+        "effect": case.effect,
+        "seed": case.seed,
+        "magnitude": case.magnitude,
+        "channel": case.channel,
+        "truth": case.truth,
+        "experiments": [e.name for e in case.experiments],
+        "info": case.info,
+    }
     (folder / "truth.json").write_text(json.dumps(meta, indent=1) + "\n")
 
 
@@ -393,8 +446,9 @@ def get_case(effect: str | None, seed: int, cache: Path | None) -> UserCase:
         t = json.loads((folder / "truth.json").read_text())
         if t["version"] == VERSION:
             exps = [load_experiment(folder / n) for n in t["experiments"]]
-            return UserCase(t["effect"], t["seed"], t["magnitude"], t["channel"], t["truth"],
-                            exps, t["info"])  # fmt: skip
+            return UserCase(
+                t["effect"], t["seed"], t["magnitude"], t["channel"], t["truth"], exps, t["info"]
+            )
     made = make_case(effect, seed)
     if folder is not None:
         save(made, folder)
@@ -403,12 +457,16 @@ def get_case(effect: str | None, seed: int, cache: Path | None) -> UserCase:
 
 def study_spec_json() -> str:
     """R, J, b free within :data:`FREE` from the exported values, sigma from the columns."""
-    return json.dumps({
-        "parameters": {n: {"start": NOMINAL[n], "lower": lo, "upper": hi}
-                       for n, (lo, hi) in FREE.items()},
-        "inputs": ["V"], "outputs": {o: {"sigma": "column"} for o in OUTPUTS},
-        "global_search": False,
-    })  # fmt: skip
+    return json.dumps(
+        {
+            "parameters": {
+                n: {"start": NOMINAL[n], "lower": lo, "upper": hi} for n, (lo, hi) in FREE.items()
+            },
+            "inputs": ["V"],
+            "outputs": {o: {"sigma": "column"} for o in OUTPUTS},
+            "global_search": False,
+        }
+    )
 
 
 def build_fmu(folder: Path) -> Path:
@@ -421,5 +479,3 @@ def build_fmu(folder: Path) -> Path:
         source = Path(__file__).parent / "pythonfmu_src" / "dc_motor.py"
         FmuBuilder.build_FMU(source, dest=folder)
     return fmu
-
-

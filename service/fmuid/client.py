@@ -155,6 +155,14 @@ class FmuidClient:
         """Return the HTML report of a done job."""
         return self._call("GET", f"/v1/jobs/{job_id}/report").text
 
+    def report_url(self, job_id: str) -> str:
+        """Return the address that opens a job's report in a browser (signed when a token is set).
+
+        The browser sends no token; the signature in the address opens this one report.
+        """
+        path: str = self._call("GET", f"/v1/jobs/{job_id}/report-link").json()["url"]
+        return f"{self.http.base_url}".rstrip("/") + path
+
     def list(self, limit: int = 100) -> list[dict[str, Any]]:
         """Return jobs, newest first."""
         jobs: list[dict[str, Any]] = self._call("GET", "/v1/jobs", params={"limit": limit}).json()[

@@ -40,8 +40,8 @@ class NotebookProgress:
 
     Drawn with IPython's display (an HTML ``<progress>`` bar, the count, the time since the
     stage's first event and its detail), at most every ``interval`` seconds; it needs no
-    widget library. ``fmuid.fit`` and ``fmuid.profile`` use it when called from a notebook
-    without ``progress=`` (:func:`default_progress`).
+    widget library. ``fmuid.fit``, ``profile``, ``diagnose`` and ``design`` use it when called
+    from a notebook without ``progress=`` (:func:`default_progress`).
 
     Parameters
     ----------

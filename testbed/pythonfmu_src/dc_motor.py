@@ -1,4 +1,4 @@
-"""pythonfmu model (FMI 2.0 co-simulation) of a DC motor: armature voltage in, current and speed out.
+"""pythonfmu model (FMI 2.0 co-simulation) of a DC motor: voltage in, current and speed out.
 
     L di/dt = V - R i - K w        J dw/dt = K i - b w
 
@@ -35,8 +35,10 @@ def expm2(a11, a12, a21, a22):
     else:
         c, g = 1.0 + d / 2, 1.0 + d / 6
     return (
-        e * (c + g * (a11 - half)), e * g * a12,
-        e * g * a21, e * (c + g * (a22 - half)),
+        e * (c + g * (a11 - half)),
+        e * g * a12,
+        e * g * a21,
+        e * (c + g * (a22 - half)),
     )
 
 
@@ -53,12 +55,15 @@ class DcMotor(Fmi2Slave):
         self.V = 0.0
         self.i = 0.0
         self.w = 0.0
-        self.register_variable(Real("V", causality=Fmi2Causality.input,
-                                    description="armature voltage [V]"))
-        self.register_variable(Real("i", causality=Fmi2Causality.output,
-                                    description="armature current [A]"))
-        self.register_variable(Real("w", causality=Fmi2Causality.output,
-                                    description="shaft speed [rad/s]"))
+        self.register_variable(
+            Real("V", causality=Fmi2Causality.input, description="armature voltage [V]")
+        )
+        self.register_variable(
+            Real("i", causality=Fmi2Causality.output, description="armature current [A]")
+        )
+        self.register_variable(
+            Real("w", causality=Fmi2Causality.output, description="shaft speed [rad/s]")
+        )
         self._key = None
         self._step = None
 
@@ -70,9 +75,8 @@ class DcMotor(Fmi2Slave):
             a21, a22 = self.K / self.J, -self.b / self.J
             phi = expm2(a11 * h, a12 * h, a21 * h, a22 * h)
             det = a11 * a22 - a12 * a21
-            m11, m12, m21, m22 = phi[0] - 1.0, phi[1], phi[2], phi[3] - 1.0
             # gamma = A^-1 (phi - I) B with B = (1/L, 0)
-            x1, x2 = m11 / self.L, m21 / self.L
+            x1, x2 = (phi[0] - 1.0) / self.L, phi[2] / self.L
             gamma = ((a22 * x1 - a12 * x2) / det, (-a21 * x1 + a11 * x2) / det)
             self._key, self._step = key, (phi, gamma)
         return self._step

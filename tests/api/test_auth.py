@@ -12,6 +12,8 @@ ROUTES = [
     ("GET", "/v1/jobs/x/result"),
     ("GET", "/v1/jobs/x/report"),
     ("GET", "/v1/jobs/x/report/a.png"),
+    ("GET", "/v1/jobs/x/report-link"),
+    ("GET", "/v1/jobs/x/report?sig=0123456789abcdef0123456789abcdef"),
     ("DELETE", "/v1/jobs/x"),
 ]
 

@@ -53,6 +53,7 @@ def test_profile_uploaded_fmu_and_builtin_model_equal_direct_call(
     builtin = client.submit("profile", msd_spec(), [step_csv], model="msd")
     running = wait_running(client, uploaded)
     assert 0 < running["progress"]["done"] <= running["progress"]["total"]
+    assert running["progress"]["detail"], running  # what it is doing, e.g. "m 3/24, k 2/24"
     assert client.health()["queued"] >= 1
     for job in (uploaded, builtin):
         status = client.wait(job, timeout=600)

@@ -70,3 +70,12 @@ def test_sampling_is_seeded_and_inside_the_bounds():
             lo, hi = space.families[t.family][name]
             assert lo <= value <= hi
         assert 4.0 <= t.duration <= 8.0
+
+
+def test_longest_test_defaults_to_the_longest_duration(tmp_path):
+    given = {k: v for k, v in MSD_SPACE.items() if k != "longest_test"}
+    path = tmp_path / "E.json"
+    path.write_text(json.dumps({**given, "duration": [3, 7.5]}))
+    assert load_space(path).longest_test == 7.5
+    path.write_text(json.dumps({**given, "duration": 6}))
+    assert load_space(path).longest_test == 6.0

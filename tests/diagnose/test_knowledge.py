@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from fmuid.data import experiment_from_arrays, spec_from_json
-from fmuid.discrepancy.catalogue import catalogue
+from fmuid.discrepancy.catalogue import TIME_FLOOR, catalogue
 from fmuid.discrepancy.knowledge import model_knowledge, read_annotations
 from fmuid.estimation.study import make_problem
 
@@ -64,7 +64,7 @@ def test_an_fmu_without_annotation_gets_generic_effects_named_by_its_variables(
     assert friction.sentence({"coulomb_v_f": 0.2}).startswith("Coulomb friction: a force of 0.2 N")
     # ranges from the data: a lag or a delay from below a sample to a fifth of the record
     tau = next(e for e in effects if e.names == ("tau_f",)).parameters[0].spec
-    assert tau.lower == pytest.approx(0.1 / 20) and tau.upper == pytest.approx(4.0 / 5)
+    assert tau.lower == pytest.approx(0.1 * TIME_FLOOR) and tau.upper == pytest.approx(4.0 / 5)
 
 
 def test_spec_physics_adds_to_the_declared_ones(tractor_fmu: Path) -> None:

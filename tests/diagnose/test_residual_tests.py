@@ -67,3 +67,15 @@ def test_first_order_lag_is_exact_for_piecewise_linear_input() -> None:
         rtol=1e-11, atol=1e-13, max_step=0.005,
     )  # fmt: skip
     np.testing.assert_allclose(first_order_lag(grid, ug, tau), sol.y[0], atol=1e-8)
+
+
+def test_input_cross_correlation_on_a_record_shorter_than_its_longest_lag() -> None:
+    """A 1 s record at 1 kHz: lags stay within a fifth of it (the 2 s default once crashed)."""
+    rng = np.random.default_rng(4)
+    t = np.arange(1001) * 1e-3
+    u = np.sin(2 * np.pi * 5 * t)
+    shift = 20  # 20 ms, inside a fifth of the record
+    r = rng.normal(size=t.size) + 5 * np.concatenate([np.zeros(shift), u[:-shift]])
+    series = rt.Series("short.csv", "y", t, r, {"u": u})
+    assert rt.input_cross_correlation(series)[0].p_value < 1e-6
+    assert rt.lagged(np.arange(3.0), [0, 5]).tolist() == [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]

@@ -25,8 +25,12 @@ FLAGS = (
 def chromium(profile_dir: Path):
     """Start headless Chromium with a fresh profile; skip the test when it is not installed."""
     webdriver = pytest.importorskip("selenium.webdriver")
-    if not (CHROMIUM.exists() and CHROMEDRIVER.exists()) and not shutil.which("chromedriver"):
-        pytest.skip("Debian packages chromium and chromium-driver are not installed")
+    driver = CHROMEDRIVER if CHROMEDRIVER.exists() else shutil.which("chromedriver")
+    if not CHROMIUM.exists() or not driver:
+        pytest.skip(
+            f"no {CHROMIUM} or chromedriver: install Debian's chromium and chromium-driver "
+            "(bash scripts/setup.sh --test)"
+        )
     from selenium.webdriver.chrome.service import Service
 
     options = webdriver.ChromeOptions()
@@ -34,7 +38,7 @@ def chromium(profile_dir: Path):
     for flag in FLAGS:
         options.add_argument(flag)
     options.add_argument(f"--user-data-dir={profile_dir}")
-    return webdriver.Chrome(options=options, service=Service(str(CHROMEDRIVER)))
+    return webdriver.Chrome(options=options, service=Service(str(driver)))
 
 
 def check_report_page(driver, url: str, parameters: list[str], screenshot: Path) -> None:

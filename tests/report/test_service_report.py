@@ -1,20 +1,23 @@
+"""A real profile job's report, served by the service with a token set, opened in Chromium.
+
+A browser sends no bearer token: the page opens through its signed link
+(``GET /v1/jobs/{id}/report-link``), its figures are embedded, its link to the profile path's
+CSV carries that file's own signature, and no other page, file or job opens with the page's.
+"""
+
 import json
-import os
-import socket
-import subprocess
-import sys
-import time
 
 import httpx
 import numpy as np
 import pytest
 
-from fmuid.client import FmuidClient
+from api_helpers import Service
 from fmuid.data import experiment_from_arrays
 from fmuid.estimation.predictor import FmuPredictor
 from report.browser import check_report_page, chromium
 
 TRUTH = {"m": 1.1, "k": 4.4, "b": 1.6}
+TOKEN = "s3cret-report"
 
 
 def _step_csv(msd_fmu, path):
@@ -28,52 +31,43 @@ def _step_csv(msd_fmu, path):
 
 
 @pytest.fixture
-def service_url(tmp_path):
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    env = {**os.environ, "FMUID_DATA_DIR": str(tmp_path / "service")}
-    env.pop("FMUID_API_TOKEN", None)
-    with open(tmp_path / "service.log", "wb") as log:
-        process = subprocess.Popen(
-            [sys.executable, "-m", "fmuid.api", "--port", str(port)],
-            env=env,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-        )
-    url = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline and process.poll() is None:
-        try:
-            if httpx.get(url + "/v1/health", timeout=1.0).status_code == 200:
-                break
-        except httpx.TransportError:
-            time.sleep(0.1)
-    yield url
-    process.terminate()
-    process.wait(timeout=20)
+def secured(tmp_path):
+    service = Service(tmp_path / "service", FMUID_API_TOKEN=TOKEN).start(timeout=90)
+    yield service
+    service.stop()
 
 
 @pytest.mark.slow
-def test_profile_job_report_served_by_the_service(service_url, msd_fmu, tmp_path):
+def test_token_protected_report_opens_in_a_browser(secured, msd_fmu, tmp_path):
     spec = {
         "parameters": {n: {"start": v, "lower": 0.01, "upper": 10.0} for n, v in TRUTH.items()},
         "inputs": ["f"],
         "outputs": {"x": {"sigma": 0.2}},
         "global_search": False,
     }
-    with FmuidClient(service_url) as client:
-        job = client.submit(
-            "profile", json.dumps(spec), [_step_csv(msd_fmu, tmp_path / "step.csv")], model="msd"
-        )
+    data = [_step_csv(msd_fmu, tmp_path / "step.csv")]
+    with secured.client() as client:
+        job = client.submit("profile", json.dumps(spec), data, fmu_path=msd_fmu)
         assert client.wait(job, timeout=600)["status"] == "done"
+        url = client.report_url(job)
+    other = "0" * 8 + job[8:]  # another job's id: the signature is checked before the job
+    page = f"{secured.url}/v1/jobs/{job}/report"
+    assert url.startswith(page + "?sig=")
+    signature = url.partition("?")[2]
+    assert httpx.get(page).status_code == 401
+    assert httpx.get(f"{page}?sig=0{signature[5:]}").status_code == 401
+    assert httpx.get(f"{secured.url}/v1/jobs/{other}/report?{signature}").status_code == 401
+    assert httpx.get(f"{secured.url}/v1/jobs/{job}/result?{signature}").status_code == 401
     driver = chromium(tmp_path / "chromium-profile")
     try:
-        check_report_page(
-            driver,
-            f"{service_url}/v1/jobs/{job}/report",
-            list(TRUTH),
-            tmp_path / "service_report.png",
-        )
+        check_report_page(driver, url, list(TRUTH), tmp_path / "service_report.png")
+        sources = driver.execute_script("return Array.from(document.images).map(i => i.src)")
+        assert all(s.startswith("data:image/png;base64,") for s in sources)
+        links = driver.execute_script("return Array.from(document.links).map(a => a.href)")
+        table = next(link for link in links if "/profile_path.csv?sig=" in link)
+        assert httpx.get(table).text.startswith("parameter,value,chi2")  # signed: opens
+        assert httpx.get(table.partition("?")[0]).status_code == 401
+        driver.get(page)  # the bare page, without the signature
+        assert "token" in driver.execute_script("return document.body.innerText")
     finally:
         driver.quit()

@@ -1,10 +1,10 @@
 """Bearer-token check of every ``/v1`` route but ``/v1/health``.
 
 It is ASGI middleware rather than a route dependency so that a request without the token is
-refused before its body (possibly a large upload) is read. A browser cannot send the token with
-the images of a report page, so the page links them with a signature instead
-(:func:`sign`, ``?sig=``): an HMAC of the file's path under the token, which opens that one file
-and nothing else.
+refused before its body (possibly a large upload) is read. A browser cannot send the token, so
+a report page and the files beside it also open with a signature instead (:func:`sign`,
+``?sig=``): an HMAC of the path under the token, which opens that one page or file and nothing
+else. ``GET /v1/jobs/{id}/report-link`` (with the token) gives the page's signed link.
 """
 
 from __future__ import annotations
@@ -19,11 +19,12 @@ from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 OPEN_PATHS = ("/v1/health",)
-_REPORT_FILE = re.compile(r"/v1/jobs/[^/]+/report/[^/]+")
+_SIGNABLE = re.compile(r"/v1/jobs/[^/]+/report(?:/[^/]+)?")
+"""A report page or a file beside it: what a signature may open."""
 
 
 def sign(token: str, path: str) -> str:
-    """Return the signature that opens ``path`` (a report file) without the bearer token."""
+    """Return the signature that opens ``path`` (a report page or file) without the token."""
     return hmac.new(token.encode(), path.encode(), hashlib.sha256).hexdigest()[:32]
 
 
@@ -67,8 +68,8 @@ class BearerAuth:
         return scheme.lower() == b"bearer" and secrets.compare_digest(given.strip(), self.token)
 
     def _signed(self, scope: Scope, path: str) -> bool:
-        """Whether a GET of a report file carries the right ``sig``."""
-        if scope.get("method") != "GET" or not _REPORT_FILE.fullmatch(path):
+        """Whether a GET of a report page or file carries the right ``sig``."""
+        if scope.get("method") != "GET" or not _SIGNABLE.fullmatch(path):
             return False
         query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
         given = query.get("sig", [""])[0]

@@ -23,6 +23,11 @@ class JobProgress(BaseModel):
     done: int
     total: int
     stage: str = Field(default="", description="Engine stage reporting, e.g. 'profile'.")
+    detail: str = Field(
+        default="",
+        description="What the job is doing, for people, e.g. 'C_atf +: 7 points' or 'refine: "
+        "120 evaluations, start 1/1, chi2 51.3, 130 simulations'.",
+    )
 
 
 class DatasetOut(BaseModel):
@@ -56,7 +61,10 @@ class JobOut(BaseModel):
             kind=job.kind,
             status=job.status,
             progress=JobProgress(
-                done=job.progress_done, total=job.progress_total, stage=job.progress_stage
+                done=job.progress_done,
+                total=job.progress_total,
+                stage=job.progress_stage,
+                detail=job.progress_detail,
             ),
             error=job.error,
             created=_time(job.created),

@@ -81,17 +81,30 @@ class AugmentedPredictor:
             self._grids[id(experiment)] = cached
         return cached[1], cached[2]
 
+    @property
+    def fine_inputs(self) -> bool:
+        """Whether the inputs go to the FMU on the fine grid even when no effect changes them.
+
+        A co-simulation FMU without input derivatives holds each input over a sub-step, with an
+        error second order in the sub-step; the base model and every augmentation must cross the
+        same sub-steps, or a candidate's statistic measures the change of that error.
+        """
+        model = self.base.model
+        return model.is_cosimulation and not model.can_interpolate_inputs
+
     def _inputs(
         self, params: Mapping[str, float], experiment: Experiment
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Return the inputs the FMU sees, on a common grid."""
         input_time, inputs = self.base.inputs_of(experiment)
         acting = sorted((e for e in self.effects if e.side == "input"), key=lambda e: e.order)
-        if not acting:
+        fine = self.fine_inputs
+        if not acting and not fine:
             return input_time, dict(inputs)
         grid = np.union1d(input_time, self._fine(experiment)[0])
-        times = {name: input_time for name in inputs}
-        values = {name: np.asarray(v, dtype=float) for name, v in inputs.items()}
+        start = grid if fine else input_time
+        times = {name: start for name in inputs}
+        values = {name: np.interp(start, input_time, v) for name, v in inputs.items()}
         for e in acting:
             t, u = times[e.target], values[e.target]
             if isinstance(e, InputDelay):

@@ -10,8 +10,8 @@ input_offset           offset_<input>              +-half the input's largest ma
 input_gain             gain_<input>                0.5 to 2 (off at 1)
 input_dead_zone        dead_<input>                0 to the 60 % quantile of the input's size
 input_saturation       limit_<input>               its 50 % quantile to its largest size (off)
-input_lag, delay       tau_<input>, delay_<input>  a 20th of the median sample interval to a
-                                                   fifth of the record (log scale, off at 0)
+input_lag, delay       tau_<input>, delay_<input>  a 1000th of the median sample interval to
+                                                   a fifth of the record (log scale, off at 0)
 output_lag             tau_outputs, tau_<output>   as the input lag
 output_gain, bias      gain_<output>, bias_<...>   0.5 to 2; +-half the output's magnitude
 output_saturation      max_<output>, min_<output>  from the median to past the data's extreme
@@ -51,8 +51,13 @@ FRICTION_WIDTH = 0.02
 SPREAD = (0.003, 0.02, 0.1, 0.4, 1.0)
 """Shares of its bound at which a nonlinear term's coefficient is screened (each sign)."""
 
+TIME_FLOOR = 1e-3
+"""Smallest lag or delay, as a share of the median sample interval (off is 0; its screen probes
+here, where the effect is linear in the time constant)."""
+
 LEVELS = (0.5, 0.7, 0.8, 0.9, 0.95, 0.98)
-"""Quantiles of a signal's size at which a threshold effect is screened."""
+"""Quantiles of a signal's size at which a threshold effect is screened; past the last, levels
+go on towards the extreme, each clipping 2.5 times fewer samples, down to two (:func:`levels`)."""
 
 
 @dataclass(frozen=True)
@@ -95,7 +100,7 @@ def _spec(start: float, lower: float, upper: float, scale: Literal["log", "lin"]
 
 
 def _time_constant(name: str, meaning: str, s: Signals) -> AddedParameter:
-    lower = s.interval / 20
+    lower = s.interval * TIME_FLOOR
     upper = max(s.record / 5, 10 * lower)
     decades = np.log10(upper / lower)
     points = min(int(2 * decades) + 2, 10)
@@ -125,6 +130,18 @@ def _gain(name: str, meaning: str) -> AddedParameter:
     return AddedParameter(name, "1", meaning, _spec(1.0, 0.5, 2.0, "lin"), 1.0, "inside")
 
 
+def levels(n: int) -> tuple[float, ...]:
+    """Return the quantile levels of a threshold screen on ``n`` samples (see :data:`LEVELS`).
+
+    A threshold that the base fit hides clips only the signal's extremes: a few samples of a long
+    record, far past the 98 % quantile.
+    """
+    out, share = list(LEVELS), 1.0 - LEVELS[-1]
+    while (share := share / 2.5) * n >= 2:
+        out.append(1.0 - share)
+    return tuple(out)
+
+
 def _quantiles(values: np.ndarray, levels: tuple[float, ...]) -> tuple[float, ...]:
     return tuple(float(q) for q in np.quantile(values, levels))
 
@@ -146,11 +163,11 @@ def _input_effects(name: str, unit: str, s: Signals, w: fx.Words) -> list[fx.Eff
             0.0, "low", probe=dead[2], grid=dead,
         )  # fmt: skip
         out.append(fx.InputDeadZone(name, (p,), w))
-    limits = _quantiles(size, LEVELS)
+    limits = _quantiles(size, levels(size.size))
     if limits[0] < top:
         p = AddedParameter(
             f"limit_{name}", unit, f"saturation of {what}", _spec(top, limits[0], top, "lin"),
-            top, "high", probe=limits[-2], grid=limits,
+            top, "high", probe=limits[len(LEVELS) - 2], grid=limits,
         )  # fmt: skip
         out.append(fx.InputSaturation(name, (p,), w))
     return out
@@ -166,18 +183,18 @@ def _output_effects(name: str, unit: str, s: Signals, w: fx.Words) -> list[fx.Ef
     ]
     span = float(np.max(y) - np.min(y)) if y.size else 0.0
     if span > 0:
-        high = _quantiles(y, LEVELS)
+        high = _quantiles(y, levels(y.size))
         upper = float(np.max(y)) + span / 4
         p = AddedParameter(
             f"max_{name}", unit, f"upper limit of {what}", _spec(upper, high[0], upper, "lin"),
-            upper, "high", probe=high[-2], grid=(*high, float(np.max(y))),
+            upper, "high", probe=high[len(LEVELS) - 2], grid=(*high, float(np.max(y))),
         )  # fmt: skip
         out.append(fx.OutputSaturation(name, (p,), w, upper=True))
-        low = _quantiles(y, tuple(1 - q for q in LEVELS))
+        low = _quantiles(y, tuple(1 - q for q in levels(y.size)))
         lower = float(np.min(y)) - span / 4
         p = AddedParameter(
             f"min_{name}", unit, f"lower limit of {what}", _spec(lower, lower, low[0], "lin"),
-            lower, "low", probe=low[-2], grid=(*low, float(np.min(y))),
+            lower, "low", probe=low[len(LEVELS) - 2], grid=(*low, float(np.min(y))),
         )  # fmt: skip
         out.append(fx.OutputSaturation(name, (p,), w, upper=False))
     return out
@@ -281,12 +298,13 @@ def undriven_sizes(problem: Problem, values: Mapping[str, float]) -> dict[str, f
     undriven = [
         n for n, v in problem.model.inputs.items() if v.is_continuous and n not in problem.inputs
     ]
-    if not undriven or not isinstance(problem.predictor, FmuPredictor):
+    predictor = getattr(problem.predictor, "base", problem.predictor)
+    if not undriven or not isinstance(predictor, FmuPredictor):
         return {}
     exp, mask, data = problem.experiments[0], problem.masks[0], problem.data[0]
     base = problem.predictor.predict(values, exp, problem.outputs)
-    input_time, inputs = problem.predictor.inputs_of(exp)
-    params = {**problem.predictor.fixed, **values}
+    input_time, inputs = predictor.inputs_of(exp)
+    params = {**predictor.fixed, **values}
     out = {}
     for name in undriven:
         pushed = get_simulator(problem.model).simulate(

@@ -46,6 +46,7 @@ from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
 from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
 from fmuid.discrepancy.scan import CandidateFit, augmented
 from fmuid.discrepancy.settle import settles, settling_tests
+from fmuid.discrepancy.tasks import candidate_pool
 from fmuid.discrepancy.validate import coupling_error, validation
 from fmuid.estimation.optimize import (
     FitOptions,
@@ -147,6 +148,11 @@ def _steps(
     return tuple(out)
 
 
+def refit(problem: Problem, fit: FitResult) -> FitResult:
+    """Refine a fit of the study on the problem the diagnosis simulates (its fine input grid)."""
+    return fit_problem(problem, start=fit.estimates, global_search=False)
+
+
 def diagnose_problem(
     problem: Problem,
     *,
@@ -154,6 +160,7 @@ def diagnose_problem(
     options: DiagnoseOptions = DiagnoseOptions(),
     progress: ProgressCallback | None = None,
     test_data: Sequence[Experiment] = (),
+    executor: Any = None,
 ) -> Diagnosis:
     """Diagnose the model mismatch of an estimation problem (see the module docstring).
 
@@ -170,14 +177,26 @@ def diagnose_problem(
     test_data
         Held-out experiments: the base and every augmented model are simulated on them from
         their fitted parameters (``validation`` in the result).
+    executor
+        A ``dask.distributed.Client``: the candidate scan and the profiles run as tasks on its
+        workers instead of ``options.workers`` local processes.
 
     Returns
     -------
     Diagnosis
 
     """
-    opts = options
-    run = Run(problem, opts, progress)
+    common = augmented(problem, [])
+    if common.predictor is not problem.predictor:
+        problem, fit = common, None if fit is None else refit(common, fit)
+    with candidate_pool(problem, options.workers, executor) as mapper:
+        run = Run(problem, options, progress, mapper, executor)
+        return _diagnose(run, fit, test_data)
+
+
+def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) -> Diagnosis:
+    """Diagnose the run's problem (:func:`diagnose_problem`'s steps)."""
+    problem, opts = run.problem, run.opts
     if fit is None:
         fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)
     cands = study_catalogue(problem, fit.estimates)
@@ -253,7 +272,7 @@ def diagnose_problem(
     added = [p for c in applied for p in c.parameters]
     prof = profile_problem(
         aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk,
-        confidence=opts.ci_confidence,
+        confidence=opts.ci_confidence, executor=run.executor,
     )  # fmt: skip
     run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -13,7 +13,7 @@ from fmuid.discrepancy import decide
 from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.result import AddedEstimate, CandidateScore
-from fmuid.discrepancy.scan import CandidateFit, Scanner, scan
+from fmuid.discrepancy.scan import CandidateFit, Mapper, Scanner, scan, serial
 from fmuid.estimation.optimize import jacobian, make_fit_result, refine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
@@ -55,8 +55,17 @@ def added_estimates(
 class Run:
     """State of one diagnosis: the problem, options, progress and the simulations spent."""
 
-    def __init__(self, problem: Problem, opts: DiagnoseOptions, progress: ProgressCallback | None):
+    def __init__(
+        self,
+        problem: Problem,
+        opts: DiagnoseOptions,
+        progress: ProgressCallback | None,
+        mapper: Mapper = serial,
+        executor: Any = None,
+    ):
         self.problem = problem
+        self.mapper = mapper
+        self.executor = executor
         self.opts = opts
         self.progress = progress
         self.t0 = time.perf_counter()
@@ -88,14 +97,14 @@ class Run:
 
         fits = scan(
             scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
-            options=self.opts.fit, stage=stage, on_candidate=seen,
+            options=self.opts.fit, stage=stage, on_candidate=seen, mapper=self.mapper,
         )  # fmt: skip
         return fits, decide.min_p(fits, self.problem.spec.seed + stage)
 
     def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
         """Count a profile: its problem's simulations, and those of worker processes."""
         self.made[id(problem)] = problem
-        if self.opts.workers != 1:
+        if self.opts.workers != 1 or self.executor is not None:
             self.extra += spent_elsewhere
 
     def cost(self) -> Cost:
@@ -111,6 +120,7 @@ def tie_intervals(run: Run, tie: CandidateFit) -> dict[str, object]:
         tie_fit,
         only=list(tie.candidate.names),
         workers=run.opts.workers,
+        executor=run.executor,
         options=run.opts.walk,
         confidence=run.opts.ci_confidence,
     )

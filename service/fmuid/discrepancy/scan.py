@@ -24,8 +24,9 @@ otherwise chi2 with as many degrees of freedom as added parameters.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any, TypeVar
 
 import numpy as np
 from scipy import stats
@@ -39,6 +40,10 @@ from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
 
 log = logging.getLogger(__name__)
+
+T = TypeVar("T")
+Mapper = Callable[..., list[Any]]
+"""``mapper(fn, *iterables)``: the results of ``fn`` over the iterables, in order."""
 
 GRID_POINTS = 7
 """Grid values of a one-parameter candidate's added parameter in the screen."""
@@ -118,7 +123,11 @@ def sensitivity_basis(jacobian: np.ndarray) -> np.ndarray:
 
 
 def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
-    """Return the root problem with the effects' parameters added and the effects applied."""
+    """Return the root problem with the effects' parameters added and the effects applied.
+
+    With no effect, the root problem simulated as its augmentations are (on their fine input
+    grid when the FMU needs it: :attr:`AugmentedPredictor.fine_inputs`).
+    """
     params = dict(root.parameter_specs)
     for c in candidates:
         for p in c.parameters:
@@ -128,9 +137,8 @@ def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
     if isinstance(base, AugmentedPredictor):
         effects = (*base.effects, *effects)
         base = base.base
-    predictor = (
-        AugmentedPredictor(base, effects) if effects and isinstance(base, FmuPredictor) else base
-    )
+    wrapped = AugmentedPredictor(base, effects) if isinstance(base, FmuPredictor) else None
+    predictor = wrapped if wrapped is not None and (effects or wrapped.fine_inputs) else base
     return Problem(
         root.fmu_path, root.experiments, root.spec, predictor=predictor, parameters=params,
         sigma=root.sigma, sigma_method=root.sigma_method, model=root.model,
@@ -273,6 +281,21 @@ class Scanner:
         )  # fmt: skip
 
 
+def screen_task(scanner: Scanner, candidate: Effect, stage: int) -> CandidateFit:
+    """Screen one candidate (a task of a worker process)."""
+    return scanner.screen(candidate, stage)
+
+
+def fit_task(scanner: Scanner, screened: CandidateFit, options: FitOptions) -> CandidateFit:
+    """Fit one screened candidate (a task of a worker process)."""
+    return scanner.fit(screened, options)
+
+
+def serial(fn: Callable[..., T], *iterables: Sequence[Any]) -> list[T]:
+    """Map in this process (the default :data:`Mapper`)."""
+    return list(map(fn, *iterables))
+
+
 def scan(
     scanner: Scanner,
     candidates: Sequence[Effect],
@@ -282,14 +305,24 @@ def scan(
     options: FitOptions,
     stage: int = 1,
     on_candidate: object = None,
+    mapper: Mapper = serial,
 ) -> list[CandidateFit]:
-    """Screen every candidate, fully fit those the screen cannot rule out; sorted by chi2."""
-    screened = [scanner.screen(c, stage) for c in candidates]
-    order = sorted(range(len(screened)), key=lambda i: screened[i].p_value)
-    chosen = {i for k, i in enumerate(order) if k < min_fits or screened[i].p_value < screen_level}
-    out = []
-    for i, s in enumerate(screened):
-        out.append(scanner.fit(s, options) if i in chosen else s)
-        if callable(on_candidate):
-            on_candidate(out[-1])
+    """Screen every candidate, fully fit those the screen cannot rule out; sorted by chi2.
+
+    ``mapper`` runs the screens, then the fits (:func:`fmuid.discrepancy.tasks.candidate_pool`:
+    side by side in worker processes; the results do not depend on it).
+    """
+    n = len(candidates)
+    screened = mapper(screen_task, [scanner] * n, list(candidates), [stage] * n)
+    order = sorted(range(n), key=lambda i: screened[i].p_value)
+    chosen = [i for k, i in enumerate(order) if k < min_fits or screened[i].p_value < screen_level]
+    chosen.sort()
+    k = len(chosen)
+    fitted = mapper(fit_task, [scanner] * k, [screened[i] for i in chosen], [options] * k)
+    out = list(screened)
+    for i, f in zip(chosen, fitted):
+        out[i] = f
+    if callable(on_candidate):
+        for f in out:
+            on_candidate(f)
     return sorted(out, key=lambda f: (f.bic, f.chi2))

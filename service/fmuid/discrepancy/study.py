@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from fmuid import provenance
 from fmuid.data import Experiment, Spec
@@ -11,6 +12,7 @@ from fmuid.data.checks import check_test_data
 from fmuid.discrepancy.engine import DiagnoseOptions, diagnose_problem
 from fmuid.discrepancy.result import Diagnosis
 from fmuid.estimation.problem import Problem
+from fmuid.formats.start import Start, start_at
 from fmuid.model.fmu import FmuModel
 from fmuid.progress import ProgressCallback, default_progress
 
@@ -23,6 +25,8 @@ def diagnose(
     options: DiagnoseOptions = DiagnoseOptions(),
     problem: Problem | None = None,
     test_data: Sequence[Experiment] = (),
+    start: Start | None = None,
+    executor: Any = None,
 ) -> Diagnosis:
     """Fit the spec's model, test its residuals and explain a mismatch by left-out physics.
 
@@ -45,6 +49,13 @@ def diagnose(
     test_data
         Held-out experiments: the base and each augmented model are simulated on them
         (``validation``: RMS simulation error per file and output, before and after).
+    start
+        Where the fit begins (:func:`fmuid.formats.start.start_at`): an earlier fit or
+        profile result (the object, or its JSON file: its estimates, without the global
+        search) or an ``.ssv`` file; as the CLI's ``--start``. Ignored with ``problem``.
+    executor
+        A ``dask.distributed.Client``: the candidate scan and the profiles run on its workers
+        (the same results as one process).
 
     Returns
     -------
@@ -56,11 +67,14 @@ def diagnose(
 
     started = provenance.now()
     progress = default_progress(progress)
+    spec = start_at(spec, start)
     problem = problem or make_problem(fmu_path, experiments, spec)
     if test_data:
         model = problem.model
         check_test_data(spec, model.parameters, model.inputs, model.outputs, test_data)
-    result = diagnose_problem(problem, options=options, progress=progress, test_data=test_data)
+    result = diagnose_problem(
+        problem, options=options, progress=progress, test_data=test_data, executor=executor
+    )
     held = [e.name for e in test_data]
     return provenance.record(
         result, fmu_sha256=problem.model.sha256, spec=spec, experiments=[*experiments, *test_data],

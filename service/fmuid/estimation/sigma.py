@@ -4,10 +4,36 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.interpolate import make_smoothing_spline
+from scipy.optimize import minimize_scalar
 
 from fmuid.errors import DataError
 
 SPLINE_METHOD = "estimate: residual spread about a cubic smoothing spline (GCV), dof-corrected"
+
+PROBES = 8
+"""Rademacher probes of the final trace estimate."""
+SEARCH_PROBES = 2
+"""Probes of the trace while the smoothing is searched (the same probes at every level)."""
+
+
+class _Gcv:
+    """Generalised cross-validation score of a smoothing spline at ``10**log_lam``."""
+
+    def __init__(self, t: np.ndarray, y: np.ndarray, probes: np.ndarray):
+        self.t, self.y, self.probes = t, y, probes
+
+    def parts(self, log_lam: float) -> tuple[float, float]:
+        """Return the residual sum of squares and the residual degrees of freedom."""
+        lam = 10.0**log_lam
+        fit_rss = float(
+            np.sum((self.y - make_smoothing_spline(self.t, self.y, lam=lam)(self.t)) ** 2)
+        )
+        smooth = [p @ make_smoothing_spline(self.t, p, lam=lam)(self.t) for p in self.probes]
+        return fit_rss, self.t.size - float(np.mean(smooth))
+
+    def __call__(self, log_lam: float) -> float:
+        fit_rss, resid_dof = self.parts(log_lam)
+        return self.t.size * fit_rss / resid_dof**2 if resid_dof > 1.0 else np.inf
 
 
 def spline_residual_sigma(
@@ -19,7 +45,9 @@ def spline_residual_sigma(
     experiment's samples of one output, its smoothing chosen by generalised cross-validation,
     and the residual sum of squares is divided by the residual degrees of freedom
     ``n - tr(H)``. The trace of the (linear) smoother ``H`` is estimated by Hutchinson's method
-    with Rademacher probes.
+    with Rademacher probes: two (the same at every level) while the smoothing is searched, on a
+    coarse grid of seven levels and then by a bounded scalar search around the best, and eight at
+    the level chosen.
 
     Parameters
     ----------
@@ -42,20 +70,19 @@ def spline_residual_sigma(
     for t, y in zip(time, values, strict=True):
         if t.size < 6:
             continue
-        probes = rng.choice([-1.0, 1.0], size=(8, t.size))
-        best = (np.inf, 0.0, 0.0)
+        probes = rng.choice([-1.0, 1.0], size=(PROBES, t.size))
         scale = (t[-1] - t[0]) ** 3 / t.size
-        for lam in np.logspace(-9, 3, 25) * scale:
-            fit_rss = float(np.sum((y - make_smoothing_spline(t, y, lam=lam)(t)) ** 2))
-            trace = float(np.mean([p @ make_smoothing_spline(t, p, lam=lam)(t) for p in probes]))
-            resid_dof = t.size - trace
-            if resid_dof <= 1.0:
-                continue
-            gcv = t.size * fit_rss / resid_dof**2
-            if gcv < best[0]:
-                best = (gcv, fit_rss, resid_dof)
-        rss += best[1]
-        dof += best[2]
+        search = _Gcv(t, y, probes[:SEARCH_PROBES])
+        grid = np.linspace(-9.0, 3.0, 7) + np.log10(scale)
+        scores = [search(x) for x in grid]
+        k = int(np.argmin(scores))
+        bounds = (grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)])
+        refined = minimize_scalar(search, bounds=bounds, method="bounded", options={"xatol": 0.05})
+        best = grid[k] if scores[k] <= refined.fun else float(refined.x)
+        fit_rss, resid_dof = _Gcv(t, y, probes).parts(best)
+        if resid_dof > 1.0:
+            rss += fit_rss
+            dof += resid_dof
     if dof <= 1.0 or rss <= 0.0:
         raise DataError(
             f"output {name!r}: too few samples (need at least 6 per experiment) to estimate sigma"

@@ -109,7 +109,8 @@ class Space(BaseModel):
     fixed
         FMU parameters the test may set -> ``[lower, upper]`` (e.g. forward speed).
     longest_test
-        Longest feasible test [s].
+        Longest feasible test [s] (default: the upper end of ``duration``); a design's
+        interval widths are weighed by ``sqrt(duration / longest_test)``.
     criterion
         ``"D"`` (geometric mean of the confidence ellipsoid's axes) or ``"E"`` (its longest axis).
     robust
@@ -140,6 +141,17 @@ class Space(BaseModel):
     verify_designs: Annotated[int, Field(ge=0, le=20)] = 2
     draws: Annotated[int, Field(ge=1, le=100)] = 5
     seed: Annotated[int, Field(ge=0)] = 0
+
+    @model_validator(mode="before")
+    @classmethod
+    def _longest_test(cls, data: Any) -> Any:
+        """Default ``longest_test`` to the longest duration asked for."""
+        if isinstance(data, dict) and "longest_test" not in data and "duration" in data:
+            try:
+                return {**data, "longest_test": _range(data["duration"])[1]}
+            except ValueError:  # the duration's own error is reported
+                return data
+        return data
 
     @field_validator("duration", mode="before")
     @classmethod

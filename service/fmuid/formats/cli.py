@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from fmuid.errors import DataError
 
 if TYPE_CHECKING:
-    from fmuid.data import Experiment, Spec
+    from fmuid.data import Experiment
 
 
 def add_commands(sub: Any) -> None:
@@ -33,15 +33,6 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--problem", required=True, help="the problem.yaml")
     p.add_argument("--out", required=True, help="folder for spec.json and one CSV per experiment")
     p.set_defaults(func=_import_petab)
-
-
-def apply_start(spec: Spec, start: str | None) -> Spec:
-    """Return ``spec`` with start values from the SSV file ``start`` (unchanged when None)."""
-    if not start:
-        return spec
-    from fmuid.formats.ssv import read_ssv, with_start_values
-
-    return with_start_values(spec, read_ssv(start).values, start)
 
 
 def _export_ssv(args: argparse.Namespace) -> int:

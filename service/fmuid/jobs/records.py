@@ -46,8 +46,8 @@ class Job:
         One of :data:`STATUSES`.
     created, started, finished
         Unix times [s]; ``started``/``finished`` are ``None`` until they happen.
-    progress_done, progress_total, progress_stage
-        The last progress event the job process reported.
+    progress_done, progress_total, progress_stage, progress_detail
+        The last progress event the job process reported (the detail: what it is doing).
     error
         Why the job failed or was cancelled.
     fmu_sha256, model_name
@@ -72,6 +72,7 @@ class Job:
     progress_done: int
     progress_total: int
     progress_stage: str
+    progress_detail: str
     error: str | None
     fmu_sha256: str
     model_name: str

@@ -86,9 +86,10 @@ def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
 class ProgressWriter:
     """Progress callback that writes to the store at most every ``interval`` seconds.
 
-    Events of open-ended stages (``total`` 0: the trust-region refinement, whose evaluations are
-    not known ahead) are not written: the job's progress keeps its last counted stage, so that
-    ``done`` never exceeds ``total`` over HTTP.
+    Each write carries the event's detail (what the job is doing). Events of open-ended stages
+    (``total`` 0: the trust-region refinement, whose evaluations are not known ahead) keep the
+    last counted stage's ``done`` and ``total``, so that ``done`` never exceeds ``total`` over
+    HTTP, and say in the detail what the stage is doing and how far it has come.
     """
 
     def __init__(self, store: JobStore, job_id: str, interval: float = PROGRESS_INTERVAL_S):
@@ -96,16 +97,25 @@ class ProgressWriter:
         self.job_id = job_id
         self.interval = interval
         self._last = 0.0
+        self._counted = Progress("", 0, 0)
 
     def __call__(self, event: Progress) -> None:
         """Record ``event`` unless one was recorded less than ``interval`` ago."""
-        if event.total <= 0:
-            return
+        counted = self._counted
+        if event.total > 0:
+            self._counted = counted = event
+            detail = event.detail
+        else:
+            detail = f"{event.stage}: {event.done} evaluations" + (
+                f", {event.detail}" if event.detail else ""
+            )
         now = time.monotonic()
         if now - self._last >= self.interval or (event.total and event.done >= event.total):
             self._last = now
             try:
-                self.store.set_progress(self.job_id, event.done, event.total, event.stage)
+                self.store.set_progress(
+                    self.job_id, counted.done, counted.total, counted.stage or event.stage, detail
+                )
             except StoreError as exc:  # progress can wait; the outcome is written with retries
                 logger.warning("progress of job %s not recorded: %s", self.job_id, exc)
 

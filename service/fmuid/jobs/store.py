@@ -52,6 +52,7 @@ CREATE TABLE IF NOT EXISTS jobs (
     progress_done INTEGER NOT NULL DEFAULT 0,
     progress_total INTEGER NOT NULL DEFAULT 0,
     progress_stage TEXT NOT NULL DEFAULT '',
+    progress_detail TEXT NOT NULL DEFAULT '',
     error TEXT,
     fmu_sha256 TEXT NOT NULL,
     model_name TEXT NOT NULL,
@@ -140,9 +141,22 @@ class JobStore:
         self.reserve = self.layout.reserve
         try:
             self._connection().executescript(_SCHEMA)
+            self._add_missing_columns()
         except sqlite3.DatabaseError as exc:  # the service still starts, and says so in health
             logger.error("job store %s cannot be opened: %s", self.db_path, exc)
         self.keep_reserve()
+
+    def _add_missing_columns(self) -> None:
+        """Give a store made by an earlier version the columns added since (progress_detail)."""
+        conn = self._connection()
+        columns = {row[1] for row in conn.execute("PRAGMA table_info(jobs)")}
+        if "progress_detail" in columns:
+            return
+        try:
+            conn.execute("ALTER TABLE jobs ADD COLUMN progress_detail TEXT NOT NULL DEFAULT ''")
+        except sqlite3.OperationalError as exc:  # another process added it meanwhile
+            if "duplicate column" not in str(exc):
+                raise
 
     # -- connections -------------------------------------------------------------------------
 
@@ -304,7 +318,8 @@ class JobStore:
         with self.transaction() as conn:
             row = conn.execute(
                 "UPDATE jobs SET status = 'running', started = ?, attempts = attempts + 1,"
-                " error = NULL, progress_done = 0, progress_total = 0, progress_stage = ''"
+                " error = NULL, progress_done = 0, progress_total = 0, progress_stage = '',"
+                " progress_detail = ''"
                 " WHERE id = (SELECT id FROM jobs WHERE status = 'queued'"
                 f" ORDER BY created, rowid LIMIT 1){fence} RETURNING *",
                 (time.time(),) if owner is None else (time.time(), owner),
@@ -318,13 +333,15 @@ class JobStore:
             conn.execute("UPDATE jobs SET pid = ? WHERE id = ?", (pid, job_id))
 
     @retried
-    def set_progress(self, job_id: str, done: int, total: int, stage: str) -> None:
-        """Record a progress event of a running job."""
+    def set_progress(
+        self, job_id: str, done: int, total: int, stage: str, detail: str = ""
+    ) -> None:
+        """Record a progress event of a running job (``detail``: what it is doing, for people)."""
         with self.transaction() as conn:
             conn.execute(
-                "UPDATE jobs SET progress_done = ?, progress_total = ?, progress_stage = ?"
-                " WHERE id = ? AND status = 'running'",
-                (done, total, stage, job_id),
+                "UPDATE jobs SET progress_done = ?, progress_total = ?, progress_stage = ?,"
+                " progress_detail = ? WHERE id = ? AND status = 'running'",
+                (done, total, stage, detail, job_id),
             )
 
     @retried

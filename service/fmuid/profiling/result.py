@@ -232,6 +232,40 @@ class ProfileResult:
             }
         )
 
+    def path_rows(self) -> list[dict[str, Any]]:
+        """Return every profile's path, one row per point (the columns of :meth:`path_frame`)."""
+        limit = self.thresholds["simultaneous"]
+        return [
+            {
+                "parameter": name,
+                "value": pt.value,
+                "chi2": pt.chi2,
+                "delta_chi2": pt.chi2 - self.fit.chi2,
+                "inside": bool(pt.chi2 - self.fit.chi2 <= limit),
+                **{
+                    n: pt.params.get(n, pt.value if n == name else float("nan"))
+                    for n in self.parameters
+                },
+                "at_bound": ", ".join(pt.at_bound),
+                "error": pt.error or "",
+            }
+            for name, profile in self.parameters.items()
+            for pt in profile.points
+        ]
+
+    def path_frame(self) -> Any:
+        """Return a pandas table of every profile's path: one row per point, in value order.
+
+        Columns: ``parameter`` (the one profiled), ``value`` (its value there), ``chi2`` (the
+        re-fitted chi2; NaN where the point failed), ``delta_chi2`` (above the optimum),
+        ``inside`` (``delta_chi2`` within the simultaneous threshold), then the re-fitted value
+        of every free parameter (the profiled one holds ``value``), ``at_bound`` (others on a
+        bound there) and ``error`` (why a point failed, else empty).
+        """
+        from fmuid.frames import pandas_module
+
+        return pandas_module().DataFrame(self.path_rows())
+
 
 def _num(v: float | None) -> float | None:
     return None if v is None else float(v)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import csv
 import io
 import math
 import re
@@ -152,12 +153,34 @@ class HtmlPage:
         self.blocks.append({"kind": "figure", "src": src, "caption": caption})
         return path
 
+    def csv_file(self, name: str, rows: Sequence[Mapping[str, object]], text: str) -> Path:
+        """Write ``rows`` (one mapping each, same keys) as ``<name>.csv`` beside the page; link it.
+
+        Numbers keep 10 significant digits, NaN is an empty cell, booleans read true/false.
+        """
+        stem = file_slug(name)
+        path = self.directory / f"{stem}.csv"
+        with path.open("w", newline="", encoding="utf-8") as stream:
+            writer = csv.writer(stream)
+            writer.writerow(list(rows[0]) if rows else [])
+            writer.writerows([_csv_cell(v) for v in row.values()] for row in rows)
+        self.link(path.name, text)
+        return path
+
     def write(self) -> Path:
         """Render ``page.html`` into ``index.html`` and return its path."""
         text = environment().get_template("page.html").render(title=self.title, blocks=self.blocks)
         path = self.directory / "index.html"
         path.write_text(text, encoding="utf-8")
         return path
+
+
+def _csv_cell(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return "" if math.isnan(value) else f"{value:.10g}"
+    return str(value)
 
 
 def _cell(value: object) -> dict[str, str]:

@@ -158,6 +158,13 @@ def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | 
             f"paths_{name}",
             f"How the other parameters move along the profile of {name}.",
         )
+    page.csv_file(
+        "profile_path",
+        result.path_rows(),
+        "Every profile's path as a table (CSV): per point the profiled value, chi2, its rise "
+        "above the optimum, whether it is inside the simultaneous threshold, and the "
+        "re-fitted values of the other parameters.",
+    )
     if problem is not None:
         _try_figure(
             page,

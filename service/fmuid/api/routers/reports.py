@@ -2,9 +2,11 @@
 
 The report (``<data_dir>/reports/<id>/index.html`` and PNGs) is drawn on the first request for it
 or one of its files (:mod:`fmuid.api.drawing`: once, in a process), then served. The
-page gets ``<base href="report/">`` so that its relative image links resolve under
-``/v1/jobs/{id}/report/``; with ``FMUID_API_TOKEN`` set, each such link carries a signature that
-opens that file in a browser (:func:`fmuid.api.auth.sign`).
+page gets ``<base href="report/">`` so that its relative links resolve under
+``/v1/jobs/{id}/report/``. With ``FMUID_API_TOKEN`` set, a browser opens the page through its
+signed link (``GET /v1/jobs/{id}/report-link``, asked with the token), and each link of the page
+to a file beside it carries that file's signature (:func:`fmuid.api.auth.sign`); the page's
+figures are embedded, so a saved page keeps them.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException
 from fastapi.responses import FileResponse, HTMLResponse
+from pydantic import BaseModel, Field
 
 from fmuid.api.auth import sign
 from fmuid.api.deps import get_drawer, get_job, get_settings
@@ -32,6 +35,17 @@ REPORT_HEADERS = {
 whatever an uploaded model's names put into it."""
 
 router = APIRouter(prefix="/v1/jobs", tags=["reports"])
+
+
+class ReportLink(BaseModel):
+    """Answer of ``GET /v1/jobs/{id}/report-link``."""
+
+    url: str = Field(
+        description="Path of the report page that a browser opens without the bearer token "
+        "(with FMUID_API_TOKEN set it carries the page's signature, ?sig=); join it to the "
+        "service's address."
+    )
+
 
 _FILE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 _LINK = re.compile(r'\b(src|href)="([A-Za-z0-9_][A-Za-z0-9_.-]*)"')
@@ -78,6 +92,25 @@ async def get_report(
             lambda m: f'{m[1]}="{m[2]}?sig={sign(settings.api_token or "", prefix + m[2])}"', html
         )
     return HTMLResponse(html, headers=REPORT_HEADERS)
+
+
+@router.get(
+    "/{job_id}/report-link",
+    response_model=ReportLink,
+    responses={401: UNAUTHORIZED, 404: _RESPONSES[404]},
+)
+async def get_report_link(
+    job: Annotated[Job, Depends(get_job)],
+    settings: Annotated[Settings, Depends(get_settings)],
+) -> ReportLink:
+    """Give the link that opens a job's report page in a browser, which cannot send the token.
+
+    The signature opens this job's page and nothing else; it stays valid while the token does.
+    """
+    path = f"/v1/jobs/{job.id}/report"
+    return ReportLink(
+        url=f"{path}?sig={sign(settings.api_token, path)}" if settings.api_token else path
+    )
 
 
 @router.get(

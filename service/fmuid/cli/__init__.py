@@ -1,4 +1,8 @@
-"""The ``fmuid`` console script; its help text is ``_DESCRIPTION``."""
+"""The ``fmuid`` console script; its help text is ``_DESCRIPTION``.
+
+Each command imports what it needs when it runs, so that ``fmuid --help`` starts fast;
+``fmuid simulate`` lives in :mod:`fmuid.cli.simulate`.
+"""
 
 from __future__ import annotations
 
@@ -6,12 +10,14 @@ import argparse
 import json
 import logging
 import math
+import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from fmuid import __version__
+from fmuid.cli.simulate import add_simulate, interface_option
 from fmuid.console import (
     EXIT_INTERRUPTED,
     ProgressDisplay,
@@ -43,7 +49,7 @@ def _write_json(path: Path, payload: dict[str, Any]) -> None:
 def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any, Any]:
     """Return the FMU, experiments and spec of a study, and the problem built of them."""
     from fmuid.data import load_experiment, load_spec
-    from fmuid.formats.cli import apply_start
+    from fmuid.formats.start import start_at
     from fmuid.stages import make_problem
 
     fmu = _fmu_path(args.fmu)
@@ -54,29 +60,10 @@ def _load_inputs(args: argparse.Namespace) -> tuple[Path, list[Any], Any, Any]:
     spec = load_spec(Path(args.spec))
     if args.interface:
         spec = spec.model_copy(update={"interface": args.interface})
-    if args.start and args.start.lower().endswith(".json"):
-        spec = _start_at_result(spec, args.start)
-    else:
-        spec = apply_start(spec, args.start)
+    spec = start_at(spec, args.start)
     if args.settle is not None:
         spec = spec.model_copy(update={"settle": args.settle})
     return fmu, experiments, spec, make_problem(fmu, experiments, spec)
-
-
-def _start_at_result(spec: Any, path: str) -> Any:
-    """Start at the estimates of a fit or profile result JSON, without the global search."""
-    from fmuid.formats.ssv import with_start_values
-
-    try:
-        saved = json.loads(Path(path).read_text())
-    except (OSError, ValueError) as exc:
-        raise DataError(f"{path}: not a readable result JSON: {exc}") from exc
-    params = saved.get("parameters") if isinstance(saved, dict) else None
-    if not isinstance(params, dict) or not all("estimate" in p for p in params.values()):
-        raise DataError(f"{path}: not a fit or profile result (no parameter estimates)")
-    log.info("starting at the estimates of %s (no global search)", path)
-    spec = with_start_values(spec, {n: p["estimate"] for n, p in params.items()}, path)
-    return spec.model_copy(update={"global_search": False})
 
 
 def _test_data(args: argparse.Namespace) -> list[Any]:
@@ -126,69 +113,6 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _simulation_values(path: Path) -> dict[str, float | str]:
-    """Parameter values of a spec for ``simulate``: ``fixed`` and each parameter's ``start``.
-
-    A spec that only fixes values (no ``parameters`` or ``outputs``) is accepted here.
-    """
-    from fmuid.data import load_spec
-
-    try:
-        raw = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise SpecError(f"{path}: cannot read the spec ({exc})") from exc
-    if isinstance(raw, dict) and "parameters" in raw and "outputs" in raw:
-        spec = load_spec(path)
-        return {**spec.fixed, **{n: p.start for n, p in spec.parameters.items()}}
-    if not isinstance(raw, dict) or not isinstance(raw.get("fixed", {}), dict):
-        raise SpecError(f"{path}: expected an object with 'fixed' (and optional 'parameters')")
-    values: dict[str, float | str] = {}
-    for name, value in raw.get("fixed", {}).items():
-        if not isinstance(value, int | float | str):
-            raise SpecError(f"{path}: fixed.{name}: a number, true/false or text, not {value!r}")
-        values[name] = value
-    for name, p in raw.get("parameters", {}).items():
-        if not isinstance(p, dict) or not isinstance(p.get("start"), int | float):
-            raise SpecError(f"{path}: parameters.{name}.start: a number is required")
-        values[name] = float(p["start"])
-    return values
-
-
-def _spec_interface(path: Path) -> str:
-    """Return the ``interface`` of the spec at ``path`` (default ``auto``), checked."""
-    interface = json.loads(path.read_text()).get("interface", "auto")
-    if interface not in ("auto", "co_simulation", "model_exchange"):
-        raise SpecError(
-            f"{path}: interface: {interface!r} is not one of 'auto', 'co_simulation' or "
-            "'model_exchange'"
-        )
-    return str(interface)
-
-
-def _cmd_simulate(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    import fmuid
-    from fmuid.data import load_experiment
-
-    experiment = load_experiment(args.data)
-    params = _simulation_values(Path(args.spec)) if args.spec else {}
-    interface = args.interface or (_spec_interface(Path(args.spec)) if args.spec else "auto")
-    run = fmuid.simulate(
-        _fmu_path(args.fmu), experiment, params, interface=interface, source=str(args.spec)
-    )
-    log.info("%s; %s", run.model.kind_label, run.input_handling)
-    columns = {"time": run.time, **(run.inputs if args.with_inputs else {}), **run.outputs}
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    np.savetxt(
-        out, np.column_stack(list(columns.values())), delimiter=",", header=",".join(columns),
-        comments="", fmt="%.12g",
-    )  # fmt: skip
-    print(out)  # noqa: T201
-    return EXIT_OK
-
-
 def _cmd_fit(args: argparse.Namespace) -> int:
     import fmuid
 
@@ -223,14 +147,16 @@ def _cmd_profile(args: argparse.Namespace) -> int:
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
-    from fmuid.discrepancy import diagnose
+    from fmuid.discrepancy import DiagnoseOptions, diagnose
 
     fmu, experiments, spec, problem = _load_inputs(args)
     tests = _test_data(args)
+    options = DiagnoseOptions(workers=args.workers or os.cpu_count() or 1)
     with ProgressDisplay() as progress:
         result = diagnose(
-            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
-        )
+            fmu, experiments, spec, options=options, progress=progress, problem=problem,
+            test_data=tests,
+        )  # fmt: skip
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -280,15 +206,6 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _interface_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--interface",
-        choices=("auto", "co_simulation", "model_exchange"),
-        help="FMI interface of an FMU that has both (default: the spec's, else auto = "
-        "co-simulation)",
-    )
-
-
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fmuid", description=_DESCRIPTION)
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
@@ -308,16 +225,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=_cmd_info)
 
-    p = sub.add_parser("simulate", help="every FMU output at the data's times")
-    p.add_argument("--fmu", required=True, help="FMU file or built-in model name")
-    p.add_argument("--data", required=True, help="CSV with time and input columns")
-    p.add_argument("--spec", help="spec JSON: parameter values (start, fixed; fixed alone will do)")
-    p.add_argument("--out", required=True, help="output CSV")
-    _interface_option(p)
-    p.add_argument(
-        "--with-inputs", action="store_true", help="write the input columns beside the outputs"
-    )
-    p.set_defaults(func=_cmd_simulate)
+    add_simulate(sub)
 
     for name, func, text in (
         ("fit", _cmd_fit, "fit the free parameters"),
@@ -343,8 +251,8 @@ def _parser() -> argparse.ArgumentParser:
             "--settle", type=_seconds,
             help="settle-in window [s] left out of the likelihood (default: the spec's settle)",
         )  # fmt: skip
-        _interface_option(p)
-        if name == "profile":
+        interface_option(p)
+        if name in ("profile", "diagnose"):
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")
         p.set_defaults(func=func)
 
@@ -409,7 +317,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         log.debug("internal failure", exc_info=True)
         sys.stderr.write(f"fmuid {args.command}: internal error: {type(exc).__name__}: {exc}\n")
         return EXIT_INTERNAL
-
-
-if __name__ == "__main__":
-    sys.exit(main())

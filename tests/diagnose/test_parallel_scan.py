@@ -1,0 +1,71 @@
+"""The candidate scan in two worker processes gives the diagnosis of one process."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.discrepancy import DiagnoseOptions, diagnose
+
+M, K, B, OFFSET, SIGMA = 1.1, 4.4, 1.6, 0.08, 0.005
+
+
+def _offset_record():  # type: ignore[no-untyped-def]
+    """m x'' + b x' + k x = f + offset (scipy), noise added."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 15.0, 0.05)
+    u = 0.6 * np.sin(2 * np.pi * 0.3 * t) + 0.4 * np.sin(2 * np.pi * 0.9 * t + 1.0)
+
+    def rhs(tt: float, s: np.ndarray) -> list[float]:
+        return [s[1], (np.interp(tt, t, u) + OFFSET - B * s[1] - K * s[0]) / M]
+
+    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12,
+                    max_step=0.01)  # fmt: skip
+    return experiment_from_arrays(
+        "offset.csv", t, {"f": u, "x": sol.y[0] + rng.normal(0, SIGMA, t.size)}
+    )
+
+
+SPEC = spec_from_json(
+    '{"parameters": {"k": {"start": 4, "lower": 0.1, "upper": 20}, "b": {"start": 1,'
+    ' "lower": 0.1, "upper": 10}}, "fixed": {"m": 1.1}, "inputs": ["f"],'
+    ' "outputs": {"x": {"sigma": 0.005}}, "seed": 0, "global_search": false}'
+)
+
+
+def _comparable(result: dict) -> dict:  # type: ignore[type-arg]
+    """A result without what differs between runs (cost, provenance)."""
+    return {k: v for k, v in result.items() if k not in ("cost", "provenance")}
+
+
+@pytest.mark.slow
+def test_two_workers_give_the_same_diagnosis(msd_fmu: Path) -> None:
+    data = [_offset_record()]
+    results = []
+    for workers in (1, 2):
+        opts = DiagnoseOptions(workers=workers, absorbed=False, discriminate=False)
+        results.append(_comparable(diagnose(msd_fmu, data, SPEC, options=opts).to_dict()))
+    one, two = results
+    assert one["mismatch"] and one["effect"] == "input_offset"
+    lo, hi = one["added_parameters"]["offset_f"]["ci"]
+    assert lo <= OFFSET <= hi
+    assert one == two
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_local_diagnosis(msd_fmu: Path) -> None:
+    from distributed import Client, LocalCluster
+
+    data = [_offset_record()]
+    opts = DiagnoseOptions(absorbed=False, discriminate=False)
+    local = diagnose(msd_fmu, data, SPEC, options=opts).to_dict()
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        with Client(cluster) as client:
+            remote = diagnose(msd_fmu, data, SPEC, options=opts, executor=client).to_dict()
+    assert _comparable(remote) == _comparable(local)
