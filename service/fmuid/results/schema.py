@@ -191,15 +191,15 @@ class DiagnosisOut(_Result):
     kind: Literal["diagnose"]
     verdict: str = ""
     mismatch: bool
-    evidence: list[EvidenceOut]
-    location: dict[str, Any] | None
-    effect: str | None
-    description: str
-    candidates: list[dict[str, Any]]
-    added_parameters: dict[str, Any]
-    chi2_before: float | None
-    chi2_after: float | None
-    parameters: dict[str, Any]
+    evidence: list[EvidenceOut] = []
+    location: dict[str, Any] = {}
+    effect: str | None = None
+    description: str = ""
+    candidates: list[dict[str, Any]] = []
+    added_parameters: dict[str, Any] = {}
+    chi2_before: float
+    chi2_after: float
+    parameters: dict[str, Any] = {}
 
 
 class DesignExperimentOut(_Open):
