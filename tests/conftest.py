@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -60,6 +61,33 @@ def _validated(to_dict: Callable[..., dict[str, Any]]) -> Callable[..., dict[str
         return out
 
     return checked
+
+
+SLOW_LINE_S = float(os.environ.get("FMUID_SLOW_LINE_S", "2"))
+"""Seconds of a test's call past which it must be marked ``slow`` (the project's ~2 s line)."""
+
+_unmarked_slow: list[tuple[float, str]] = []
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Record each unmarked test whose call (fixture set-up excluded) took over the slow line."""
+    if report.when == "call" and "slow" not in report.keywords and report.duration > SLOW_LINE_S:
+        _unmarked_slow.append((report.duration, report.nodeid))
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """List the unmarked tests over the slow line: a printed check, never a failure.
+
+    Timings vary with the machine's load, so the run does not fail on them; the load average is
+    printed so that a reader can tell a slow test from a busy machine.
+    """
+    if not _unmarked_slow:
+        return
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
+    terminalreporter.section(f"unmarked tests over {SLOW_LINE_S:g} s (mark them slow)")
+    terminalreporter.line(f"load average {load} on {os.cpu_count()} CPUs")
+    for seconds, nodeid in sorted(_unmarked_slow, reverse=True):
+        terminalreporter.line(f"{seconds:7.2f} s  {nodeid}")
 
 
 @pytest.fixture(scope="session")
