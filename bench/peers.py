@@ -4,17 +4,19 @@ Bench only: pyPESTO is never a runtime dependency of fmuid. Install it beside th
 ``pip install --target /tmp/peers --no-deps pypesto==0.7.0 pandas tqdm h5py`` and run
 ``PYTHONPATH=service:/tmp/peers python bench/peers.py``.
 
-The case is the tractor's ramp 5 Hz at SNR 25 (noise seed 1): C_atf's upper simultaneous end
-lies in a second, lower valley. fmuid runs twice: a full study (all six parameters, with the
-check of the fit) and the bench's parameters alone from the checked fit; pyPESTO profiles the
-bench's parameters from the same fit. Every pointwise and simultaneous CI end is compared with
-an exact reference crossing computed here by root-finding on multi-start scipy re-fits
-(``tests/profiles/reference.py``). pyPESTO runs twice: with its defaults (L-BFGS-B,
-finite-difference gradients, ``ProfileOptions()``) and tuned (trust-region least squares on the
-residuals, the simultaneous threshold as its stop ratio, shorter steps). Simulations count FMU
-runs (pyPESTO's through a module-level counter in its objective functions, which survives the
-copies pyPESTO makes; fmuid's own count less the initial fit); wall times are on one core
-unless ``--workers`` says otherwise.
+The cases (``--cases``, noise seed 1) are the tractor's well-posed rate-limited step (``ramp``
+5 Hz, SNR 1000), its chirp (5 Hz, SNR 100) and its low-SNR step (ramp 5 Hz, SNR 25, where
+C_atf's upper simultaneous end lies in a second, lower valley). fmuid runs twice: a full study
+(all six parameters, with the check of the fit) and the bench's parameters alone from the
+checked fit; pyPESTO profiles the bench's parameters from the same fit, and the ratios of the
+last table are fmuid's second run over tuned pyPESTO's. Every pointwise and simultaneous CI end
+is compared with an exact reference crossing computed here by root-finding on multi-start scipy
+re-fits (``tests/profiles/reference.py``). pyPESTO runs tuned (trust-region least squares on the
+residuals, the simultaneous threshold as its stop ratio, shorter steps) and, with
+``--defaults``, with its defaults (L-BFGS-B, finite-difference gradients, ``ProfileOptions()``).
+Simulations count FMU runs (pyPESTO's through a module-level counter in its objective
+functions, which survives the copies pyPESTO makes; fmuid's own count less the initial fit);
+wall times are on one core unless ``--workers`` says otherwise.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fmuid.demo.thesis import DESIGNS, simulate_dataset, study_spec
 from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.problem import Problem
 from fmuid.model.builtin import builtin_fmu
@@ -137,15 +140,26 @@ def fmuid_ends(
     return out  # type: ignore[return-value]
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--parameters", nargs="*", default=["C_atf", "C_atr"])
-    parser.add_argument("--workers", type=int, default=1, help="fmuid's worker processes")
-    args = parser.parse_args()
-    bench = _load("bench_profile", HERE / "profile.py")
-    reference = _load("reference", HERE.parent / "tests" / "profiles" / "reference.py")
-    fmu = builtin_fmu("tractor_implement")
-    data, spec = bench.dataset(fmu, 25.0, seed=1)
+#: The cases: label -> (design, SNR). The ramps use ``bench/profile.py``'s dataset.
+CASES = {
+    "step 5 Hz SNR 1000": ("ramp", 1000.0),
+    "chirp 5 Hz SNR 100": ("chirp", 100.0),
+    "step 5 Hz SNR 25": ("ramp", 25.0),
+}
+
+
+def case_data(bench, fmu: Path, kind: str, snr: float, seed: int):  # noqa: ANN001, ANN201
+    """The dataset and spec of one case (noise from ``seed``)."""
+    if kind == "ramp":
+        return bench.dataset(fmu, snr, seed=seed)
+    design = next(d for d in DESIGNS if d.kind == kind)
+    data, sigma = simulate_dataset(fmu, design, snr, np.random.default_rng(seed))
+    return data, study_spec(sigma)
+
+
+def run_case(bench, reference, fmu: Path, label: str, args: argparse.Namespace) -> dict:  # noqa: ANN001
+    """Run fmuid and pyPESTO on one case, print its table and return its summary row."""
+    data, spec = case_data(bench, fmu, *CASES[label], seed=args.seed)
     problem = make_problem(fmu, [data], spec)
     fit = fit_problem(problem, global_search=False)
     thr = thresholds(spec.confidence, problem.n_free)
@@ -158,17 +172,18 @@ def main() -> None:
     t0 = time.perf_counter()
     only = profile_problem(problem, prof.fit, only=args.parameters, workers=args.workers)
     sims = only.cost.simulations - prof.fit.cost.simulations
-    rows[f"fmuid, {len(index)} from the checked fit"] = (time.perf_counter() - t0, sims, only)
+    ours = f"fmuid, {len(index)} from the checked fit"
+    rows[ours] = (time.perf_counter() - t0, sims, only)
     z_hat, chi2_hat = prof.fit.z_estimate(), prof.fit.chi2
     table = {
         label: (wall, sims, fmuid_ends(p, args.parameters))
         for label, (wall, sims, p) in rows.items()
     }
-    for tuned in (False, True):
+    for tuned in (False, True) if args.defaults else (True,):
         t0 = time.perf_counter()
         sims, ends = run_pypesto(problem, z_hat, index, tuned, thr)
-        label = "pyPESTO 0.7.0 " + ("tuned" if tuned else "defaults")
-        table[label] = (time.perf_counter() - t0, sims, ends)
+        name = "pyPESTO 0.7.0 " + ("tuned" if tuned else "defaults")
+        table[name] = (time.perf_counter() - t0, sims, ends)
     exact: dict[str, dict[str, tuple[float | None, ...]]] = {}
     for name, i in zip(args.parameters, index, strict=True):
         ref = reference.ReferenceProfile(problem, i, z_hat)
@@ -180,7 +195,7 @@ def main() -> None:
             for kind, t in thr.items()
         }
     print(
-        "tractor ramp 5 Hz, SNR 25, seed 1; 68 % CI ends (pw: pointwise, sim: simultaneous), "
+        f"\ntractor {label}, seed {args.seed}; 68 % CI ends (pw: pointwise, sim: simultaneous), "
         "error in % of the half-width against the bench's reference crossings"
     )
     heads = [
@@ -190,22 +205,62 @@ def main() -> None:
         for s in ("lo", "hi")
     ]
     print(f"{'tool':32s} {'wall s':>7} {'sims':>7}  " + " ".join(f"{h:>13s}" for h in heads))
-    for label, (wall, sims, ends) in table.items():
-        cells = [
-            _error(ends[name][kind][k], exact[name][kind][k], float(z_hat[i]))
-            for name, i in zip(args.parameters, index, strict=True)
+    worst = {}
+    for name, (wall, sims, ends) in table.items():
+        errors = [
+            _error(ends[n][kind][k], exact[n][kind][k], float(z_hat[i]))
+            for n, i in zip(args.parameters, index, strict=True)
             for kind in thr
             for k in range(2)
         ]
-        print(f"{label:32s} {wall:7.1f} {sims:7d}  " + " ".join(f"{c:>13s}" for c in cells))
+        worst[name] = max(errors, key=lambda e: e[0])[0]
+        cells = [text for _, text in errors]
+        print(f"{name:32s} {wall:7.1f} {sims:7d}  " + " ".join(f"{c:>13s}" for c in cells))
+    peer = "pyPESTO 0.7.0 tuned"
+    return {
+        "case": label,
+        "ours": table[ours][:2],
+        "peer": table[peer][:2],
+        "worst": (worst[ours], worst[peer]),
+    }
 
 
-def _error(ours: float | None, exact: float | None, z_hat: float) -> str:
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--cases", nargs="*", choices=list(CASES), default=list(CASES))
+    parser.add_argument("--parameters", nargs="*", default=["C_atf", "C_atr"])
+    parser.add_argument("--workers", type=int, default=1, help="fmuid's worker processes")
+    parser.add_argument("--seed", type=int, default=1, help="noise seed")
+    parser.add_argument("--defaults", action="store_true", help="also pyPESTO's defaults")
+    args = parser.parse_args()
+    bench = _load("bench_profile", HERE / "profile.py")
+    reference = _load("reference", HERE.parent / "tests" / "profiles" / "reference.py")
+    fmu = builtin_fmu("tractor_implement")
+    summary = [run_case(bench, reference, fmu, label, args) for label in args.cases]
+    print(
+        f"\nfmuid ({len(args.parameters)} parameters from the checked fit) / pyPESTO 0.7.0 tuned; "
+        "worst end: error as a fraction of the half-width (target: ratios 0.25 / 0.3, ends 0.05)"
+    )
+    print(
+        f"{'case':22s} {'fmuid sims':>10} {'wall s':>7} {'peer sims':>10} {'wall s':>7}"
+        f" {'sims ratio':>10} {'wall ratio':>10} {'worst fmuid':>11} {'worst peer':>10}"
+    )
+    for row in summary:
+        (w0, s0), (w1, s1) = row["ours"], row["peer"]
+        print(
+            f"{row['case']:22s} {s0:10d} {w0:7.1f} {s1:10d} {w1:7.1f} {s0 / s1:10.2f}"
+            f" {w0 / w1:10.2f} {row['worst'][0]:11.4f} {row['worst'][1]:10.4f}"
+        )
+
+
+def _error(ours: float | None, exact: float | None, z_hat: float) -> tuple[float, str]:
+    """The error of one end as a fraction of the half-width (inf when open or closed wrongly)."""
     if exact is None:
-        return "open: right" if ours is None else "closed: WRONG"
+        return (0.0, "open: right") if ours is None else (np.inf, "closed: WRONG")
     if ours is None:
-        return "open: WRONG"
-    return f"{100 * abs(ours - exact) / abs(exact - z_hat):.2f} %"
+        return np.inf, "open: WRONG"
+    error = abs(ours - exact) / abs(exact - z_hat)
+    return error, f"{100 * error:.2f} %"
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ that pass Ljung-Box and the chi2 noise band while the true augmentation's likeli
 p in [1e-12, 1e-3]. The FMU is built here by pythonfmu; only the diagnose result JSON is read.
 
     python bench/userfmu.py [--seeds 2] [--controls 6] [--effects input_delay,...]
-        [--cache DIR] [--jobs N] [--log F]
+        [--cache DIR] [--jobs N] [--log F] [--no-absorbed] [--skip-done LOG]
     python bench/userfmu.py --table F [F ...]
 
 Prints one JSON line per case, then per effect: cases, flagged, named right, named right or
@@ -33,10 +33,12 @@ sys.path.insert(0, str(ROOT / "service"))
 
 import usermotor as um  # noqa: E402
 from fmuid.data import spec_from_json  # noqa: E402
-from fmuid.discrepancy import diagnose  # noqa: E402
+from fmuid.discrepancy import DiagnoseOptions, diagnose  # noqa: E402
 
 
-def run_case(task: tuple[str | None, int], cache: Path | None, fmu_dir: Path) -> dict[str, Any]:
+def run_case(
+    task: tuple[str | None, int], cache: Path | None, fmu_dir: Path, absorbed: bool
+) -> dict[str, Any]:
     """Make (or load) one case and diagnose it; an engine failure becomes a row."""
     effect, seed = task
     row: dict[str, Any] = {"effect": effect or "control", "seed": seed}
@@ -45,9 +47,9 @@ def run_case(task: tuple[str | None, int], cache: Path | None, fmu_dir: Path) ->
     row.update({k: case.info.get(k) for k in ("concealed", "lrt_p", "achieved_lambda")})
     t0 = time.perf_counter()
     try:
-        result = diagnose(
-            um.build_fmu(fmu_dir), case.experiments, spec_from_json(um.study_spec_json())
-        ).to_dict()
+        spec = spec_from_json(um.study_spec_json())
+        options = DiagnoseOptions(absorbed=absorbed)
+        result = diagnose(um.build_fmu(fmu_dir), case.experiments, spec, options=options).to_dict()
     except Exception as exc:  # a failure is a result of the bench, not its end
         return {**row, "error": f"{type(exc).__name__}: {exc}"}
     row["seconds"] = round(time.perf_counter() - t0, 1)
@@ -111,6 +113,14 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=1, help="worker processes")
     parser.add_argument("--log", type=Path, default=None, help="append JSON lines here")
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of logs")
+    parser.add_argument(
+        "--no-absorbed",
+        action="store_true",
+        help="skip the re-profiles of the original parameters (they do not enter the table)",
+    )
+    parser.add_argument(
+        "--skip-done", type=Path, default=None, help="skip the cases already diagnosed in this log"
+    )
     args = parser.parse_args()
     if args.table:
         table([json.loads(line) for f in args.table for line in f.read_text().splitlines()])
@@ -121,11 +131,17 @@ def main() -> None:
     s0 = args.first_seed
     tasks: list[tuple[str | None, int]] = [(None, s0 + s) for s in range(args.controls)]
     tasks += [(e, s0 + s) for s in range(args.seeds) for e in args.effects.split(",")]
+    if args.skip_done and args.skip_done.exists():
+        rows_done = [json.loads(line) for line in args.skip_done.read_text().splitlines()]
+        done = {(r["effect"], r["seed"]) for r in rows_done if "mismatch" in r}
+        tasks = [t for t in tasks if (t[0] or "control", t[1]) not in done]
     fmu_dir = Path(tempfile.mkdtemp(prefix="fmuid-userfmu-"))
     um.build_fmu(fmu_dir)
     rows = []
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        for row in pool.map(run_case, tasks, [args.cache] * len(tasks), [fmu_dir] * len(tasks)):
+        n = len(tasks)
+        absorbed = [not args.no_absorbed] * n
+        for row in pool.map(run_case, tasks, [args.cache] * n, [fmu_dir] * n, absorbed):
             rows.append(row)
             print(json.dumps(row), flush=True)
             if args.log:

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import functools
 import os
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import settings
@@ -27,6 +30,37 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     for item in items:
         if SERVICE_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def results_match_their_schema() -> Iterator[None]:
+    """Check every result JSON this test process writes against its kind's one schema.
+
+    Each result class's ``to_dict`` is wrapped to validate its output with
+    ``fmuid.results.schema.KINDS[kind]``: a field that the schema does not type as written
+    fails the test that wrote it.
+    """
+    from fmuid.discrepancy.result import Diagnosis
+    from fmuid.estimation.result import FitResult
+    from fmuid.experiment_design.result import DesignResult
+    from fmuid.profiling.result import ProfileResult
+
+    with pytest.MonkeyPatch.context() as patch:
+        for cls in (FitResult, ProfileResult, Diagnosis, DesignResult):
+            patch.setattr(cls, "to_dict", _validated(cls.to_dict))
+        yield
+
+
+def _validated(to_dict: Callable[..., dict[str, Any]]) -> Callable[..., dict[str, Any]]:
+    from fmuid.results.schema import KINDS
+
+    @functools.wraps(to_dict)
+    def checked(self: Any, *args: Any, **kwargs: Any) -> dict[str, Any]:
+        out = to_dict(self, *args, **kwargs)
+        KINDS[out["kind"]].model_validate(out)
+        return out
+
+    return checked
 
 
 SLOW_LINE_S = float(os.environ.get("FMUID_SLOW_LINE_S", "2"))

@@ -20,7 +20,7 @@ The layers, lowest first; a module may import its own layer and lower ones only:
       < report
       < stages / demo
       < settings (the service's configuration)
-      < jobs
+      < jobs / intake (checks and stages uploads; the job process loads its inputs there)
       < api / client
       < cli / console
 
@@ -47,7 +47,7 @@ LAYERS = [
     {"report"},
     {"stages", "demo"},
     {"settings"},
-    {"jobs"},
+    {"jobs", "intake"},
     {"api", "client"},
     {"cli", "console"},
 ]

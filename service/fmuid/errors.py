@@ -1,8 +1,11 @@
 """Exception hierarchy of fmuid.
 
 Every message names the file, field, row, column or FMI function at fault, so that a user can
-fix the input without reading a traceback. The CLI maps ``DataError``/``SpecError``/``FmuError``
-raised while loading inputs to exit status 2 and the HTTP API maps them to 4xx responses.
+fix the input without reading a traceback. Each class is one cause, and the CLI gives each cause
+its own exit status (:mod:`fmuid.cli`): bad input (``DataError``, ``SpecError``, ``FmuError``: an
+FMU that cannot be used) 2, a fit the FMU failed at every trial point (``FitError``) 3, a failed
+build of an FMU or of the native loop (``BuildError``: the toolchain) 4, anything else 1. The HTTP
+API answers the bad-input classes found while checking an upload with 4xx responses.
 """
 
 from __future__ import annotations
@@ -37,3 +40,11 @@ class FmuError(FmuidError):
         super().__init__(message)
         self.function = function
         self.status = status
+
+
+class FitError(FmuidError):
+    """A fit found no solution: the FMU failed at every trial point or from every start."""
+
+
+class BuildError(FmuidError):
+    """The toolchain failed: gcc is missing or cannot compile an FMU or the native loop."""

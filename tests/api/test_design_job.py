@@ -10,7 +10,7 @@ import pytest
 from api_helpers import msd_spec
 from design_cases import MSD_SPACE
 from fmuid.client import ApiError
-from fmuid.jobs.vet import VetTask, vet
+from fmuid.intake.vet import VetTask, vet
 
 
 def test_design_job_returns_ranked_designs_and_a_report(service, tmp_path, step_csv):

@@ -85,8 +85,18 @@ def test_missing_output_column_is_422(service):
             ),
             "m",
         ),
+        (
+            json.dumps(
+                {
+                    **json.loads(msd_spec()),
+                    "parameters": {"k": {"start": 4.4, "lower": 0.01, "upper": 10.0}},
+                    "fixed": {"m": "heavy"},
+                }
+            ),
+            "fixed.m: 'm' is a Real parameter; 'heavy' does not fit",
+        ),
     ],
-    ids=["invalid-json", "unknown-parameter", "confidence", "lower>upper"],
+    ids=["invalid-json", "unknown-parameter", "confidence", "lower>upper", "fixed-type"],
 )
 def test_bad_spec_is_422_naming_the_field(service, csv, spec, needle):
     response = post(service.url, spec=spec, data=[("step.csv", csv)])

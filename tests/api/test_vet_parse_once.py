@@ -8,7 +8,7 @@ import pytest
 
 from fmuid.data import InputLimits
 from fmuid.errors import SpecError
-from fmuid.jobs.vet import VetTask, _check_design, check_json_shape, vet
+from fmuid.intake.vet import VetTask, _check_design, check_json_shape, vet
 from fmuid.model.fmu import FmuModel
 
 SPEC = {

@@ -167,3 +167,30 @@ def test_the_readme_python_example_takes_strings_and_builtin_names(tmp_path):
     assert fit.estimates["k"] == pytest.approx(4.4, rel=0.02)
     with pytest.raises(fmuid.errors.FmuError, match="built-in model"):
         fmuid.fit("no_such_model", [load_experiment(data)], load_spec(spec))
+
+
+def test_a_fit_the_fmu_fails_everywhere_exits_3(msd_fmu, tmp_path, capsys, monkeypatch):
+    from fmuid.errors import FmuError
+    from fmuid.estimation.problem import Problem
+
+    def fail(self, z):
+        raise FmuError("msd: fmi2DoStep returned fmi2Error", "fmi2DoStep", "fmi2Error")
+
+    monkeypatch.setattr(Problem, "residuals", fail)
+    data = msd_csv(tmp_path / "step.csv")
+    spec = write(tmp_path / "spec.json", json.dumps(SPEC))
+    out = tmp_path / "r.json"
+    code, _, err = run(
+        ["fit", "--fmu", msd_fmu, "--data", data, "--spec", spec, "--out", out], capsys
+    )
+    assert code == 3
+    assert "the simulation failed at every trial point" in err
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+def test_a_build_without_gcc_exits_4(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))
+    code, _, err = run(["build-fmus", "--out", tmp_path / "out"], capsys)
+    assert code == 4
+    assert "gcc was not found" in err

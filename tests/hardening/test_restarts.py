@@ -10,10 +10,10 @@ import time
 
 import jsonschema
 import pytest
-from result_schemas import SCHEMAS
 
 from api_helpers import msd_spec
 from fmuid.jobs.store import JobStore
+from fmuid.results.schema import json_schema
 
 pytestmark = pytest.mark.slow
 
@@ -52,7 +52,7 @@ def test_sigkill_with_jobs_queued_and_running(service_factory, step_csv, test_fm
         assert status["kind"] == kind and status["created"] == before[job]["created"]
         expected_attempts = 2 if before[job]["status"] == "running" else 1
         assert status["attempts"] == expected_attempts, (before[job], status)
-        jsonschema.validate(client.result(job), SCHEMAS[kind])
+        jsonschema.validate(client.result(job), json_schema(kind))
     service.stop()
 
     with sqlite3.connect(data_dir / "jobs.sqlite") as db:
@@ -61,4 +61,4 @@ def test_sigkill_with_jobs_queued_and_running(service_factory, step_csv, test_fm
     for job, kind in jobs.items():
         stored = store.result(job)
         assert stored is not None
-        jsonschema.validate(json.loads(stored), SCHEMAS[kind])
+        jsonschema.validate(json.loads(stored), json_schema(kind))

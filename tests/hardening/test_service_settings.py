@@ -120,4 +120,4 @@ def test_profile_model_reads_a_profile_result():
     result = toy_profile_result()
     typed = ProfileResultOut.model_validate(result.to_dict())
     assert set(typed.parameters) == set(result.parameters)
-    assert typed.parameters["m"].ci.simultaneous == list(result.parameters["m"].ci_simultaneous)
+    assert typed.parameters["m"].ci.simultaneous == result.parameters["m"].ci_simultaneous

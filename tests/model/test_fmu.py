@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from fmpy.validation import validate_fmu
 
-from fmuid.errors import FmuError
+from fmuid.errors import BuildError, FmuError
 from fmuid.model.build import build_fmus
 from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu, model_src_dir
 from fmuid.model.fmu import FmuModel
@@ -143,20 +143,20 @@ def test_missing_linux_binary_is_rejected(msd_fmu: Path, tmp_path: Path) -> None
         FmuModel(path)
 
 
-def test_compiler_error_raises_fmu_error_with_message(tmp_path: Path) -> None:
+def test_compiler_error_raises_build_error_with_message(tmp_path: Path) -> None:
     src = tmp_path / "src"
     shutil.copytree(model_src_dir(), src)
     for other in ("tractor_implement", "msd_parallel"):
         shutil.rmtree(src / other)
     (src / "msd" / "model.c").write_text("this is not C;\n")
-    with pytest.raises(FmuError, match="msd: gcc failed") as info:
+    with pytest.raises(BuildError, match="msd: gcc failed") as info:
         build_fmus(src, tmp_path / "out")
     assert "error" in str(info.value)
 
 
-def test_missing_gcc_raises_fmu_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_missing_gcc_raises_build_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("PATH", str(tmp_path))
-    with pytest.raises(FmuError, match="gcc was not found"):
+    with pytest.raises(BuildError, match="gcc was not found"):
         build_fmus(model_src_dir(), tmp_path / "out")
 
 

@@ -19,7 +19,7 @@ from fmuid.api.failures import add_failure_handlers
 from fmuid.api.limits import BodyLimit
 from fmuid.api.openapi import answer_options, document_errors, serve_docs, validation_error
 from fmuid.api.routers import health, jobs, reports
-from fmuid.api.vetting import VettingPool
+from fmuid.intake.pool import VettingPool
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import JobStore
 from fmuid.jobs.worker import Supervisor

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import HTTPException, Request
 
 from fmuid.api.drawing import ReportDrawer
-from fmuid.api.vetting import VettingPool
+from fmuid.intake.pool import VettingPool
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import Job, JobStore
 from fmuid.jobs.worker import Supervisor

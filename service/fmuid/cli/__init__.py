@@ -26,11 +26,20 @@ from fmuid.console import (
     log_handler,
     profile_table,
 )
-from fmuid.errors import DataError, FmuError, SpecError
+from fmuid.errors import BuildError, DataError, FitError, FmuError, SpecError
 
 log = logging.getLogger("fmuid")
 
-EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_FIT_FAILED, EXIT_BUILD_FAILED = 0, 1, 2, 3, 4
+"""Exit status by cause: success, internal failure, bad input (data, spec, an FMU that cannot be
+used), no fit because the FMU failed at every trial point or start, a failed build (gcc)."""
+EXIT_BY_CAUSE: tuple[tuple[type[Exception], int], ...] = (
+    (FitError, EXIT_FIT_FAILED),
+    (BuildError, EXIT_BUILD_FAILED),
+    (DataError, EXIT_BAD_INPUT),
+    (SpecError, EXIT_BAD_INPUT),
+    (FmuError, EXIT_BAD_INPUT),
+)
 
 _DESCRIPTION = (
     "Which FMU parameters can your measurements pin down, and why do model and data disagree? "
@@ -304,9 +313,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     func: Callable[[argparse.Namespace], int] = args.func
     try:
         return func(args)
-    except (DataError, SpecError, FmuError) as exc:
+    except (FitError, BuildError, DataError, SpecError, FmuError) as exc:
         sys.stderr.write(f"fmuid {args.command}: error: {exc}\n")
-        return EXIT_BAD_INPUT
+        return next(code for cause, code in EXIT_BY_CAUSE if isinstance(exc, cause))
     except BrokenPipeError:
         sys.stderr.close()  # the reader (e.g. `| head`) is gone: nothing left to say
         return EXIT_OK

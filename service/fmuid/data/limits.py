@@ -1,7 +1,7 @@
 """Size limits of the input files, so that reading any file costs time linear in a bounded size.
 
 :class:`InputLimits` bounds CSV files and specs, :class:`FmuLimits` the checks of an uploaded FMU
-(:mod:`fmuid.jobs.fmucheck`).
+(:mod:`fmuid.intake.fmucheck`).
 
 The defaults suit the CLI and the service alike; the service takes each from its ``FMUID_<NAME>``
 setting (:class:`fmuid.settings.Settings`). A file over a limit is refused before or while it is

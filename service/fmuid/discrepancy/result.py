@@ -7,7 +7,7 @@ from typing import Any
 
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.residual_tests import TestResult, Window
-from fmuid.estimation.result import Cost
+from fmuid.estimation.result import SCHEMA_VERSION, Cost
 from fmuid.provenance import Provenance, entry
 from fmuid.readable import p_text
 
@@ -226,6 +226,8 @@ class Diagnosis:
         for name, value in self.parameters_before.items():
             params.setdefault(name, {"before": value, "after": None})
         out = {
+            "kind": "diagnose",
+            "schema_version": SCHEMA_VERSION,
             "mismatch": self.mismatch,
             "evidence": [t.to_dict() for t in self.evidence],
             "location": self.location,

@@ -13,7 +13,7 @@ from pymoo.core.problem import Problem as PymooProblem
 from pymoo.optimize import minimize as pymoo_minimize
 from scipy.optimize import least_squares, minimize
 
-from fmuid.errors import FmuError
+from fmuid.errors import FitError, FmuError
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.model.registry import fmu_summary
@@ -96,6 +96,8 @@ def refine(
     ------
     FmuError
         When the simulation fails at the final point.
+    FitError
+        When the simulation failed at every trial point.
 
     """
     free = np.ones(problem.n_free, bool) if free is None else free
@@ -127,7 +129,7 @@ def refine(
         x_scale="jac",
     )
     if np.all(res.fun == FAILED_RESIDUAL):
-        raise FmuError(f"{problem.fmu_path.name}: the simulation failed at every trial point")
+        raise FitError(f"{problem.fmu_path.name}: the simulation failed at every trial point")
     x, chi2, message = res.x, float(2.0 * res.cost), str(res.message)
     if options.polish:
         pol = minimize(
@@ -227,13 +229,13 @@ def fit_problem(
         report = RefineProgress(progress, problem, f"start {k}/{len(starts)}") if progress else None
         try:
             z, chi2, message = refine(problem, z0, options=options, on_residuals=report)
-        except FmuError as exc:
+        except (FmuError, FitError) as exc:
             errors.append(str(exc))
             continue
         if best is None or chi2 < best[1]:
             best = (z, chi2, message)
     if best is None:
-        raise FmuError(f"the fit failed: {'; '.join(errors)}")
+        raise FitError(f"the fit failed: {'; '.join(errors)}")
     z, chi2, message = best
     jac = jacobian(problem, z)
     return make_fit_result(problem, z, chi2, jac, message, global_search, t0, sims0)

@@ -13,6 +13,13 @@ from fmuid.provenance import Provenance, entry
 if TYPE_CHECKING:
     from fmuid.estimation.validation import ValidationEntry
 
+SCHEMA_VERSION = 1
+"""Version of the result JSON's schema (``fmuid.results.schema``), written as ``schema_version``.
+
+Version 1 added ``kind`` and ``schema_version``; files without them are version 0 (read by
+their keys). Raise it when a field changes meaning; adding a field keeps it.
+"""
+
 
 @dataclass(frozen=True)
 class Cost:
@@ -122,6 +129,8 @@ class FitResult:
         """Return the JSON form written by ``fmuid fit``."""
         on_bound = self.space.at_bound(self.z_estimate())
         return {
+            "kind": "fit",
+            "schema_version": SCHEMA_VERSION,
             "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name, **self.fmu_info},
             "n_data": self.n_data,
             "chi2": float(self.chi2),

@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from fmuid.data import Experiment, Spec, check_against_model
-from fmuid.errors import SpecError
+from fmuid.data import Experiment, Spec
+from fmuid.estimation.check import check_study
 from fmuid.estimation.problem import Problem
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import FmuModel
@@ -28,14 +28,6 @@ def make_problem(
     of a built-in model (e.g. ``"msd"``).
     """
     model = fmu if isinstance(fmu, FmuModel) else FmuModel(resolve_fmu(fmu))
-    wrong_interface = model.interface_problem(spec.interface)
-    if wrong_interface:
-        raise SpecError(f"{spec.source}: interface: {wrong_interface}")
-    model = model.with_interface(spec.interface)
-    check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
-    free = [*spec.parameters, *(n for p in spec.physics.values() for n in p.parameters)]
-    problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
-    if problems:
-        raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
+    model = check_study(model, spec, experiments)
     get_simulator(model)
     return Problem(model.path, experiments, spec, model=model)

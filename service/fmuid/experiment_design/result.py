@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from fmuid.estimation.result import Cost
+from fmuid.estimation.result import SCHEMA_VERSION, Cost
 from fmuid.experiment_design.signals import Trial, trial_from_dict
 from fmuid.experiment_design.verify import Verification
 from fmuid.provenance import Provenance, entry, read
@@ -124,6 +124,8 @@ class DesignResult:
     def to_dict(self) -> dict[str, Any]:
         """Return the contract's JSON form."""
         return {
+            "kind": "design",
+            "schema_version": SCHEMA_VERSION,
             "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name},
             "criterion": self.criterion,
             "designs": [d.to_dict(self.input_name) for d in self.designs],

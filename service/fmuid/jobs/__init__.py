@@ -1,1 +1,1 @@
-"""The job queue: SQLite store, supervisor of isolated job processes, upload checks."""
+"""The job queue: SQLite store, supervisor of isolated job processes (upload checks: intake)."""

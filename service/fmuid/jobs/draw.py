@@ -61,8 +61,8 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
 
     Every failure, reading the job back included, ends in ``reports/<id>.error``.
     """
-    from fmuid.data import load_experiment, spec_from_json
-    from fmuid.jobs.run import limit_process, stage_inputs
+    from fmuid.intake.inputs import load_job_inputs
+    from fmuid.jobs.run import limit_process
     from fmuid.results import result_from_dict
 
     layout = DataLayout(data_dir)
@@ -76,16 +76,9 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
         if job is None or text is None:
             raise LookupError(f"job {job_id} has no stored result")
         with tempfile.TemporaryDirectory(prefix=f"fmuid-report-{job_id[:8]}-") as work:
-            fmu, data = stage_inputs(store, job, Path(work))
-            spec = spec_from_json(job.spec, "spec")
-            if job.kind == "design":
-                from fmuid.experiment_design import load_space
-
-                experiments: list[Any] = [load_space(data[0])]
-            else:
-                experiments = [load_experiment(path) for path in data]
+            inputs = load_job_inputs(store, job, Path(work))
             result = result_from_dict(json.loads(text))
-            write_report(result, layout, job_id, fmu, experiments, spec)
+            write_report(result, layout, job_id, inputs.fmu, inputs.experiments, inputs.spec)
     except Exception as exc:  # reading the job back failed: say why, the job stays done
         logger.exception("report of %s failed", job_id)
         shutil.rmtree(tmp, ignore_errors=True)

@@ -24,7 +24,7 @@ from fmuid.jobs.reaper import kill_tree
 JOB_NICENESS = 5
 """Job and report drawing processes run at this lower priority, so that on a machine whose cores
 they fill the service still answers health and polls at once (checking processes run lower
-still, :data:`fmuid.jobs.vet.NICENESS`)."""
+still, :data:`fmuid.intake.vet.NICENESS`)."""
 JOB_DB_ENV = "FMUID_JOB_DB"
 JOB_ID_ENV = "FMUID_JOB_ID"
 PARENT_ENV = "FMUID_JOB_PARENT"

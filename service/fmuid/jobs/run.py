@@ -35,10 +35,10 @@ from pathlib import Path
 from typing import Any
 
 from fmuid.errors import FmuidError
+from fmuid.intake.inputs import load_job_inputs
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.health import free_space_problem
 from fmuid.jobs.reaper import become_subreaper, end_tree_on_parent_death, kill_tree
-from fmuid.jobs.records import TEST_DATA
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.progress import Progress
 
@@ -120,32 +120,6 @@ class ProgressWriter:
                 logger.warning("progress of job %s not recorded: %s", self.job_id, exc)
 
 
-def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[Path]]:
-    """Give the job's FMU and CSV blobs their file names back; return their paths.
-
-    Experiment names come from the CSV file names, so each CSV is linked into ``workdir`` under
-    its uploaded name. The FMU gets a stable path, ``<data_dir>/fmus/<sha256>/<model>.fmu``,
-    because dask workers open it by path: on other machines they see it when the data folder is
-    shared (the compose file mounts the same volume).
-    """
-    fmu_dir = store.layout.fmu_dir(job.fmu_sha256)
-    fmu_dir.mkdir(parents=True, exist_ok=True)
-    fmu = fmu_dir / (re.sub(r"[^A-Za-z0-9_-]", "_", job.model_name)[:100] + ".fmu")
-    if not fmu.exists():
-        link = fmu_dir / f".{os.getpid()}.tmp"
-        link.unlink(missing_ok=True)
-        link.symlink_to(store.blob_path(job.fmu_sha256))
-        os.replace(link, fmu)
-    data_dir = workdir / "data"
-    (data_dir / TEST_DATA).mkdir(parents=True)
-    paths = []
-    for dataset in job.datasets:
-        path = data_dir / dataset.name
-        path.symlink_to(store.blob_path(dataset.sha256))
-        paths.append(path)
-    return fmu, paths
-
-
 def run_engine(
     kind: str,
     fmu: Path,
@@ -198,8 +172,6 @@ def run_job(
     The result is stored only while the disk of the data folder keeps ``min_free_bytes`` free
     (the level below which the API takes no new job); under it the job fails, saying so.
     """
-    from fmuid.data import load_experiment, spec_from_json
-
     progress = ProgressWriter(store, job.id)
     # a design keeps its finished evaluations here until the job has an outcome: a job
     # re-run after a restart of the service resumes from them
@@ -209,19 +181,11 @@ def run_job(
         _removed_after(checkpoint),
     ):
         try:
-            fmu, data = stage_inputs(store, job, Path(tmp))
-            _log_fmi_version(fmu)
-            spec = spec_from_json(job.spec, "spec")
-            experiments: list[Any] = []
-            tests = [load_experiment(p) for p in data if p.parent.name == TEST_DATA]
-            data = [p for p in data if p.parent.name != TEST_DATA]
-            if job.kind == "design":
-                from fmuid.experiment_design import load_space
-
-                experiments.append(load_space(data[0]))
-            else:
-                experiments.extend(load_experiment(path) for path in data)
-            result = run_engine(job.kind, fmu, experiments, spec, progress, dask, checkpoint, tests)
+            inputs = load_job_inputs(store, job, Path(tmp), on_staged=_log_fmi_version)
+            result = run_engine(
+                job.kind, inputs.fmu, inputs.experiments, inputs.spec, progress, dask,
+                checkpoint, inputs.test_data,
+            )  # fmt: skip
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:
             store.fail(job.id, str(exc))

@@ -24,7 +24,7 @@ from typing import Any
 
 import fmpy
 
-from fmuid.errors import FmuError
+from fmuid.errors import BuildError, FmuError
 
 logger = logging.getLogger(__name__)
 
@@ -253,9 +253,9 @@ def _compile(src_dir: Path, model_dir: Path, include_dir: Path, library: Path) -
     try:
         result = subprocess.run(command, capture_output=True, text=True, check=False)
     except FileNotFoundError as exc:
-        raise FmuError(f"cannot build FMU {model_dir.name}: gcc was not found on PATH") from exc
+        raise BuildError(f"cannot build FMU {model_dir.name}: gcc was not found on PATH") from exc
     if result.returncode != 0:
-        raise FmuError(f"cannot build FMU {model_dir.name}: gcc failed:\n{result.stderr.strip()}")
+        raise BuildError(f"cannot build FMU {model_dir.name}: gcc failed:\n{result.stderr.strip()}")
 
 
 def _write_zip(target: Path, files: dict[str, bytes]) -> None:
@@ -274,7 +274,7 @@ def build_fmu(src_dir: Path, model_dir: Path, out_dir: Path) -> Path:
 
     Raises
     ------
-    FmuError
+    BuildError
         If gcc is missing or fails (the message holds the compiler's output).
 
     """
@@ -320,8 +320,10 @@ def build_fmus(src_dir: Path, out_dir: Path) -> list[Path]:
 
     Raises
     ------
+    BuildError
+        If gcc is missing or fails.
     FmuError
-        If gcc is missing or fails, or a variable table is malformed.
+        If a variable table is malformed.
 
     """
     src_dir = Path(src_dir)

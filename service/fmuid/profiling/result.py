@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.result import SCHEMA_VERSION, Cost, FitResult
 from fmuid.provenance import Provenance, entry
 
 IDENTIFIABLE = "identifiable"
@@ -180,6 +180,8 @@ class ProfileResult:
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form of the contract."""
         return {
+            "kind": "profile",
+            "schema_version": SCHEMA_VERSION,
             "fmu": {
                 "sha256": self.fit.fmu_sha256,
                 "model_name": self.fit.model_name,

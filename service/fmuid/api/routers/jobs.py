@@ -18,8 +18,8 @@ from fmuid.api.deps import (
 from fmuid.api.forms import FormOffLoop
 from fmuid.api.results import ResultOut
 from fmuid.api.schemas import UNAUTHORIZED, ErrorOut, JobCreated, JobList, JobOut, Kind
-from fmuid.api.submission import SubmissionError, Upload, submit
-from fmuid.api.vetting import PoolBusy, VettingPool
+from fmuid.intake.pool import PoolBusy, VettingPool
+from fmuid.intake.submission import SubmissionError, Upload, submit
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.housekeeping import delete_jobs
 from fmuid.jobs.store import FINAL_STATUSES, Job, JobStore, QueueFull

@@ -10,7 +10,7 @@ import os
 import subprocess
 from pathlib import Path
 
-from fmuid.errors import FmuError
+from fmuid.errors import BuildError
 from fmuid.model.builtin import fmu_dir
 
 logger = logging.getLogger(__name__)
@@ -34,7 +34,7 @@ def compile_library(target: Path) -> None:
 
     Raises
     ------
-    FmuError
+    BuildError
         If gcc is missing or fails, or the folder is not writable (naming which).
 
     """
@@ -43,14 +43,14 @@ def compile_library(target: Path) -> None:
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise FmuError(f"cannot write the compiled loop to {target}: {exc}") from exc
+        raise BuildError(f"cannot write the compiled loop to {target}: {exc}") from exc
     try:
         done = subprocess.run(command, capture_output=True, text=True, check=False)
     except FileNotFoundError as exc:
-        raise FmuError(f"cannot compile {SOURCE}: gcc was not found on PATH") from exc
+        raise BuildError(f"cannot compile {SOURCE}: gcc was not found on PATH") from exc
     try:
         if done.returncode != 0:
-            raise FmuError(f"cannot compile {SOURCE}: gcc failed:\n{done.stderr.strip()}")
+            raise BuildError(f"cannot compile {SOURCE}: gcc failed:\n{done.stderr.strip()}")
         os.replace(partial, target)
     finally:
         partial.unlink(missing_ok=True)
@@ -70,7 +70,7 @@ def native_library() -> ctypes.CDLL | None:
             logger.info("compiling the native master loop into %s", path)
             compile_library(path)
         lib = ctypes.CDLL(str(path))
-    except (FmuError, OSError) as exc:
+    except (BuildError, OSError) as exc:
         logger.warning("native master loop unavailable (%s); using the Python loop", exc)
         return None
     for function in (lib.fmuid_cosimulation, lib.fmuid_feedback):

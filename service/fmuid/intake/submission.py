@@ -3,7 +3,7 @@
 Everything a job needs is checked before it is queued, so a bad upload gets a 422 naming the
 problem at once instead of a failed job later. Uploads are written to a private temporary folder
 under their original names (experiment names come from the CSV file names); a checking process
-(:mod:`fmuid.api.vetting`, :mod:`fmuid.jobs.vet`) then checks the FMU, each CSV file (or a
+(:mod:`fmuid.intake.pool`, :mod:`fmuid.intake.vet`) then checks the FMU, each CSV file (or a
 design job's experiment space), the spec and how they fit together, so that no uploaded byte is
 parsed in the service itself; the files move into the content-addressed blob store only once
 they passed.
@@ -17,11 +17,11 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
-from fmuid.api.vetting import VettingPool
 from fmuid.errors import FmuidError
+from fmuid.intake.pool import VettingPool
+from fmuid.intake.vet import VetTask
 from fmuid.jobs.records import TEST_DATA, Kind
 from fmuid.jobs.store import Dataset, Job, JobStore
-from fmuid.jobs.vet import VetTask
 from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu
 from fmuid.settings import Settings
 

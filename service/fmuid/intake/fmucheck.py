@@ -7,7 +7,7 @@ with co-simulation or model exchange and a linux x86-64 binary
 (:class:`fmuid.model.fmu.FmuModel`), every member intact (CRC), a ``modelDescription.xml``
 within a size and a variable-count limit, and the binary must load and export the FMI functions
 fmuid calls; the load is tried in a separate, memory- and time-limited process group
-(:mod:`fmuid.jobs.probe_fmu`) because loading a library runs its code, and the whole group is
+(:mod:`fmuid.intake.probe_fmu`) because loading a library runs its code, and the whole group is
 killed afterwards, so that nothing a binary forks outlives the check.
 """
 

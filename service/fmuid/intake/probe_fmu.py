@@ -1,7 +1,7 @@
 """Load an FMU's linux binary in a throw-away process and check its FMI 2.0/3.0 functions.
 
 Run as a script (``python -I probe_fmu.py FMU MEMORY_MB TIMEOUT_S FMI_VERSION INTERFACE
-MODEL_IDENTIFIER``) by :mod:`fmuid.jobs.fmucheck`, which has parsed the FMU and hands on what the
+MODEL_IDENTIFIER``) by :mod:`fmuid.intake.fmucheck`, which has parsed the FMU and hands on what the
 probe needs from its model description, as the leader of its own process group; it imports only
 the standard library so that it starts fast, and it limits its own memory, file sizes and time
 (an alarm ends it) before touching the upload: loading a shared library runs its constructors,

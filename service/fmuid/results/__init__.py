@@ -1,12 +1,16 @@
 """Saved results back as result objects (``load_result``); their tables are ``to_frame``.
 
-The kind of a result JSON is read from its shape: ``designs`` (design), ``mismatch``
-(diagnose), ``thresholds`` (profile), else ``parameters`` with ``chi2`` (fit).
+A result JSON names its kind (``"kind"``: ``fit``, ``profile``, ``diagnose``, ``design``) and
+the version of its schema (``"schema_version"``); it is checked against the kind's schema
+(:mod:`fmuid.results.schema`) and built from it. A file written before these fields existed
+(version 0) is read by its keys: ``designs`` (design), ``mismatch`` (diagnose), ``thresholds``
+(profile), else ``parameters`` with ``chi2`` (fit).
 """
 
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 from typing import Any
 
@@ -16,9 +20,20 @@ from fmuid.discrepancy.residual_tests import TestResult, Window
 from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis, EffectStep
 from fmuid.discrepancy.words import RENAMED, RENAMED_PARAMETERS
 from fmuid.errors import SpecError
-from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.result import SCHEMA_VERSION, Cost, FitResult
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
 from fmuid.provenance import read
+from fmuid.results.schema import (
+    KINDS,
+    DiagnosisOut,
+    FitResultOut,
+    ProfileParameterOut,
+    ProfilePointOut,
+    ProfileResultOut,
+    QualityOut,
+)
+
+logger = logging.getLogger(__name__)
 
 
 def load_result(path: str | Path) -> Any:
@@ -33,7 +48,8 @@ def load_result(path: str | Path) -> Any:
     -------
     FitResult, ProfileResult, Diagnosis or the design result
         Equal to the saved result in everything its JSON holds: ``load_result(p).to_dict()``
-        is the saved JSON. What the JSON leaves out (the fit's Jacobian) is empty.
+        is the saved JSON (with ``kind`` and ``schema_version`` added to a file written before
+        they existed). What the JSON leaves out (the fit's Jacobian) is empty.
 
     Raises
     ------
@@ -56,26 +72,75 @@ def load_result(path: str | Path) -> Any:
         raise SpecError(f"{path}: not a complete fmuid result: {exc}") from exc
 
 
-def result_from_dict(data: dict[str, Any]) -> Any:
-    """Build the result object of a result's JSON form (see :func:`load_result`)."""
+def kind_of(data: dict[str, Any]) -> str:
+    """Return the kind of a result's JSON: its ``kind``, else guessed from its keys (version 0).
+
+    Raises
+    ------
+    SpecError
+        If ``kind`` names no result kind, or a JSON without it has none of the kinds' keys.
+
+    """
+    if "kind" in data:
+        if data["kind"] not in KINDS:
+            raise SpecError(
+                f"result kind {data['kind']!r} is unknown; the kinds: {', '.join(KINDS)}"
+            )
+        return str(data["kind"])
     if "designs" in data:
-        return _design_from_dict(data)
+        return "design"
     if "mismatch" in data:
-        return diagnosis_from_dict(data)
+        return "diagnose"
     if "thresholds" in data:
-        return profile_from_dict(data)
+        return "profile"
     if "parameters" in data and "chi2" in data:
-        return fit_from_dict(data)
+        return "fit"
     raise SpecError(
-        "not an fmuid result: expected the keys of a fit (parameters, chi2), profile "
+        "not an fmuid result: no 'kind', and not the keys of a fit (parameters, chi2), profile "
         f"(thresholds), diagnose (mismatch) or design (designs) result; got {sorted(data)}"
     )
+
+
+def current(data: dict[str, Any]) -> dict[str, Any]:
+    """Return a result's JSON in the current schema: ``kind`` and ``schema_version`` set.
+
+    A file of version 0 (without them) gets its kind from its keys; a diagnosis' effect and
+    parameter names of earlier versions become today's (``sensor_lag`` as ``output_lag``).
+    """
+    kind = kind_of(data)
+    if kind == "diagnose":
+        data = _renamed(data)
+    version = data.get("schema_version", 0)
+    if isinstance(version, int) and version > SCHEMA_VERSION:
+        logger.warning(
+            "result schema version %s is newer than this fmuid's %s: fields it does not know "
+            "are kept untyped",
+            version,
+            SCHEMA_VERSION,
+        )
+    return {**data, "kind": kind, "schema_version": version}
+
+
+def result_from_dict(data: dict[str, Any]) -> Any:
+    """Build the result object of a result's JSON form (see :func:`load_result`).
+
+    Raises
+    ------
+    SpecError
+        If the JSON is of no result kind.
+    pydantic.ValidationError
+        (a ``ValueError``) if it does not match its kind's schema, naming the field.
+
+    """
+    data = current(data)
+    return _BUILDERS[data["kind"]](data)
 
 
 def _design_from_dict(data: dict[str, Any]) -> Any:
     # imported on first use: the design package is only needed for design results
     from fmuid.experiment_design.result import DesignResult
 
+    KINDS["design"].model_validate(data)
     return DesignResult.from_dict(data)
 
 
@@ -86,31 +151,92 @@ def _cost(data: dict[str, Any] | None) -> Cost:
 
 def fit_from_dict(data: dict[str, Any]) -> FitResult:
     """Build a :class:`FitResult` from ``FitResult.to_dict()`` (or a profile's JSON)."""
-    params = data["parameters"]
-    fmu = dict(data.get("fmu", {}))
+    data = current(data)
+    model = ProfileResultOut if data["kind"] == "profile" else FitResultOut
+    return _fit(model.model_validate(data), data)
+
+
+def _fit(m: FitResultOut | ProfileResultOut, data: dict[str, Any]) -> FitResult:
+    """Build the fit of a validated fit or profile JSON (``data``: the fields kept as saved)."""
+    params = m.parameters
     names = tuple(params)
+    fmu = {k: str(v) for k, v in data["fmu"].items() if k not in ("sha256", "model_name")}
     return FitResult(
-        fmu_sha256=fmu.pop("sha256", ""),
-        model_name=fmu.pop("model_name", ""),
+        fmu_sha256=m.fmu.sha256,
+        model_name=m.fmu.model_name,
         names=names,
-        scales=tuple(params[n].get("scale", "lin") for n in names),
-        lower={n: float(params[n]["lower"]) for n in names},
-        upper={n: float(params[n]["upper"]) for n in names},
-        estimates={n: float(params[n]["estimate"]) for n in names},
-        chi2=float(data["chi2"]),
-        n_data=int(data["n_data"]),
-        sigma={k: float(v) for k, v in data.get("sigma", {}).items()},
-        sigma_method=dict(data.get("sigma_method", {})),
+        scales=tuple(params[n].scale for n in names),
+        lower={n: params[n].lower for n in names},
+        upper={n: params[n].upper for n in names},
+        estimates={n: params[n].estimate for n in names},
+        chi2=m.chi2,
+        n_data=m.n_data,
+        sigma=dict(m.sigma),
+        sigma_method=dict(m.sigma_method),
         jacobian=np.zeros((0, len(names))),
-        fixed=dict(data.get("fixed", {})),
+        fixed=dict(m.fixed) if isinstance(m, FitResultOut) else dict(data.get("fixed", {})),
         global_search=bool(data.get("global_search", True)),
         message=str(data.get("message", "")),
-        cost=_cost(data.get("cost")),
-        fmu_info={k: str(v) for k, v in fmu.items()},
-        units={
-            **data.get("units", {}),
-            **{n: params[n]["unit"] for n in names if params[n].get("unit")},
-        },
+        cost=Cost(m.cost.simulations, m.cost.seconds),
+        fmu_info=fmu,
+        units={**m.units, **{n: params[n].unit for n in names if params[n].unit}},
+        provenance=read(data),
+    )
+
+
+def _point(p: ProfilePointOut) -> ProfilePoint:
+    return ProfilePoint(
+        value=p.value,
+        chi2=float("nan") if p.chi2 is None else p.chi2,
+        params=dict(p.params),
+        at_bound=tuple(p.at_bound),
+        error=p.error,
+    )
+
+
+def _quality(q: QualityOut) -> ProfileQuality:
+    return ProfileQuality(
+        checks=q.checks,
+        starts=q.starts,
+        jumps=q.jumps,
+        lower_valleys=q.lower_valleys,
+        rewalks=q.rewalks,
+        end_refits=q.end_refits,
+        unsettled=tuple(q.unsettled_reasons),
+        check_simulations=q.check_simulations,
+    )
+
+
+def _profile(name: str, p: ProfileParameterOut) -> ParameterProfile:
+    return ParameterProfile(
+        name=name,
+        estimate=p.estimate,
+        lower=p.lower,
+        upper=p.upper,
+        scale=p.scale,
+        ci_simultaneous=p.ci.simultaneous,
+        ci_pointwise=p.ci.pointwise,
+        status=p.status,
+        points=tuple(_point(q) for q in p.profile),
+        limited_by=tuple(p.limited_by or ()),
+        status_reason=p.status_reason,
+        quality=_quality(p.quality),
+    )
+
+
+def profile_from_dict(data: dict[str, Any]) -> ProfileResult:
+    """Build a :class:`ProfileResult` from ``ProfileResult.to_dict()``."""
+    data = current(data)
+    m = ProfileResultOut.model_validate(data)
+    return ProfileResult(
+        fit=_fit(m, data),
+        confidence=m.confidence,
+        thresholds={k: float(v) for k, v in data["thresholds"].items()},
+        parameters={n: _profile(n, p) for n, p in m.parameters.items()},
+        better_optimum_found=m.better_optimum_found,
+        structural_check=dict(data["structural_check"]),
+        cost=Cost(m.cost.simulations, m.cost.seconds),
+        checks=dict(m.checks),
         provenance=read(data),
     )
 
@@ -118,62 +244,6 @@ def fit_from_dict(data: dict[str, Any]) -> FitResult:
 def _interval(pair: list[float | None]) -> tuple[float | None, float | None]:
     lo, hi = pair
     return (None if lo is None else float(lo), None if hi is None else float(hi))
-
-
-def _point(p: dict[str, Any]) -> ProfilePoint:
-    error = p.get("error")
-    return ProfilePoint(
-        value=float(p["value"]),
-        chi2=float("nan") if p["chi2"] is None else float(p["chi2"]),
-        params={k: float(v) for k, v in p.get("params", {}).items()},
-        at_bound=tuple(p.get("at_bound", ())),
-        error=error,
-    )
-
-
-def _quality(q: dict[str, Any]) -> ProfileQuality:
-    return ProfileQuality(
-        checks=int(q.get("checks", 0)),
-        starts=int(q.get("starts", 0)),
-        jumps=int(q.get("jumps", 0)),
-        lower_valleys=int(q.get("lower_valleys", 0)),
-        rewalks=int(q.get("rewalks", 0)),
-        end_refits=int(q.get("end_refits", 0)),
-        unsettled=tuple(q.get("unsettled_reasons", ())),
-        check_simulations=int(q.get("check_simulations", 0)),
-    )
-
-
-def profile_from_dict(data: dict[str, Any]) -> ProfileResult:
-    """Build a :class:`ProfileResult` from ``ProfileResult.to_dict()``."""
-    fit = fit_from_dict(data)
-    parameters = {}
-    for name, p in data["parameters"].items():
-        parameters[name] = ParameterProfile(
-            name=name,
-            estimate=float(p["estimate"]),
-            lower=float(p["lower"]),
-            upper=float(p["upper"]),
-            scale=p.get("scale", "lin"),
-            ci_simultaneous=_interval(p["ci"]["simultaneous"]),
-            ci_pointwise=_interval(p["ci"]["pointwise"]),
-            status=p["status"],
-            points=tuple(_point(q) for q in p.get("profile", ())),
-            limited_by=tuple(p.get("limited_by", ())),
-            status_reason=p.get("status_reason", ""),
-            quality=_quality(p.get("quality", {})),
-        )
-    return ProfileResult(
-        fit=fit,
-        confidence=float(data["confidence"]),
-        thresholds={k: float(v) for k, v in data["thresholds"].items()},
-        parameters=parameters,
-        better_optimum_found=bool(data.get("better_optimum_found", False)),
-        structural_check=dict(data.get("structural_check", {})),
-        cost=_cost(data.get("cost")),
-        checks=dict(data.get("checks", {})),
-        provenance=read(data),
-    )
 
 
 def _test(t: dict[str, Any]) -> TestResult:
@@ -217,7 +287,8 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
     Effect and parameter names of earlier versions read as today's (``sensor_lag`` as
     ``output_lag``, ``tau_sensor`` as ``tau_outputs``).
     """
-    data = _renamed(data)
+    data = current(data)
+    DiagnosisOut.model_validate(data)
     params = data.get("parameters", {})
     return Diagnosis(
         mismatch=bool(data["mismatch"]),
@@ -261,3 +332,11 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         validation=tuple(data.get("validation", ())),
         provenance=read(data),
     )
+
+
+_BUILDERS = {
+    "fit": fit_from_dict,
+    "profile": profile_from_dict,
+    "diagnose": diagnosis_from_dict,
+    "design": _design_from_dict,
+}

@@ -1,6 +1,6 @@
-"""Check a submission's files in a process of its own: ``python -m fmuid.jobs.vet MEMORY_MB``.
+"""Check a submission's files in a process of its own: ``python -m fmuid.intake.vet MEMORY_MB``.
 
-The service (:mod:`fmuid.api.vetting`) keeps a few of these processes and sends each a
+The service (:mod:`fmuid.intake.pool`) keeps a few of these processes and sends each a
 :class:`VetTask` as one JSON line on stdin; the process answers one JSON line on its stdout:
 ``{"ok": true, "model_name": ...}`` or ``{"ok": false, "status": 422, "detail": ...}``. Every
 parse of uploaded bytes (spec, CSV files, a design's space, ``modelDescription.xml``) and the
@@ -26,11 +26,12 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fmuid.data import InputLimits, Spec, check_against_model, load_experiment, spec_from_json
+from fmuid.data import InputLimits, Spec, load_experiment, spec_from_json
 from fmuid.data.checks import check_test_data
 from fmuid.data.limits import over_limit
 from fmuid.errors import FmuidError, SpecError
-from fmuid.jobs.fmucheck import FmuLimits, check_fmu
+from fmuid.estimation.check import check_study
+from fmuid.intake.fmucheck import FmuLimits, check_fmu
 from fmuid.jobs.reaper import become_subreaper, kill_tree, reap_children
 from fmuid.jobs.records import TEST_DATA
 from fmuid.model.fmu import FmuModel
@@ -44,7 +45,7 @@ NICENESS = 10
 service lowers the priority before the imports (:data:`COMMAND`)."""
 COMMAND = (
     f"import os, runpy; os.nice({NICENESS});"
-    " runpy.run_module('fmuid.jobs.vet', run_name='__main__', alter_sys=True)"
+    " runpy.run_module('fmuid.intake.vet', run_name='__main__', alter_sys=True)"
 )
 """``python -c COMMAND MEMORY_MB`` starts a checking process at low priority."""
 RECYCLE_RSS_MB = 400
@@ -145,13 +146,10 @@ def vet(task: VetTask) -> dict[str, Any]:
         if task.space_file is not None:
             _check_design(workdir / task.space_file, spec, model, input_limits)
             return {"ok": True, "model_name": model.model_name}
-        wrong_interface = model.interface_problem(spec.interface)
-        if wrong_interface:
-            return {"ok": False, "status": 422, "detail": f"spec: interface: {wrong_interface}"}
         experiments = [
             load_experiment(workdir / "data" / name, input_limits) for name in task.data_names
         ]
-        check_against_model(spec, model.parameters, model.inputs, model.outputs, experiments)
+        model = check_study(model, spec, experiments)
         tests = [load_experiment(workdir / TEST_DATA / n, input_limits) for n in task.test_names]
         check_test_data(spec, model.parameters, model.inputs, model.outputs, tests)
     except FmuidError as exc:

@@ -1,6 +1,6 @@
 """A few long-lived processes that check submissions, so that no upload stalls the service.
 
-Each process runs :mod:`fmuid.jobs.vet` (started on first use, restarted after it ends; the
+Each process runs :mod:`fmuid.intake.vet` (started on first use, restarted after it ends; the
 check's time counts from its first line, written once its imports are done), leads
 its own session and checks one submission at a time. :meth:`VettingPool.run` lets at most
 ``size`` submissions in at once; the others wait without holding a thread, and after
@@ -26,8 +26,8 @@ from typing import Any, TypeVar
 import anyio
 import anyio.to_thread
 
+from fmuid.intake.vet import COMMAND, READY, VetTask
 from fmuid.jobs.reaper import kill_tree
-from fmuid.jobs.vet import COMMAND, READY, VetTask
 
 logger = logging.getLogger(__name__)
 

@@ -1,0 +1,86 @@
+"""A stored job's inputs, staged as files and loaded: one loader for the job and its report."""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fmuid.jobs.records import TEST_DATA
+from fmuid.jobs.store import Job, JobStore
+
+
+@dataclass(frozen=True)
+class JobInputs:
+    """What the engine needs to run a job (or to draw its report).
+
+    Attributes
+    ----------
+    fmu
+        The FMU file.
+    spec
+        The parsed spec.
+    experiments
+        The experiments of a fit, profile or diagnosis; for a design, its one experiment space.
+    test_data
+        The held-out experiments (empty for a design).
+
+    """
+
+    fmu: Path
+    spec: Any
+    experiments: list[Any]
+    test_data: list[Any]
+
+
+def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[Path]]:
+    """Give the job's FMU and CSV blobs their file names back; return their paths.
+
+    Experiment names come from the CSV file names, so each CSV is linked into ``workdir`` under
+    its uploaded name. The FMU gets a stable path, ``<data_dir>/fmus/<sha256>/<model>.fmu``,
+    because dask workers open it by path: on other machines they see it when the data folder is
+    shared (the compose file mounts the same volume).
+    """
+    fmu_dir = store.layout.fmu_dir(job.fmu_sha256)
+    fmu_dir.mkdir(parents=True, exist_ok=True)
+    fmu = fmu_dir / (re.sub(r"[^A-Za-z0-9_-]", "_", job.model_name)[:100] + ".fmu")
+    if not fmu.exists():
+        link = fmu_dir / f".{os.getpid()}.tmp"
+        link.unlink(missing_ok=True)
+        link.symlink_to(store.blob_path(job.fmu_sha256))
+        os.replace(link, fmu)
+    data_dir = workdir / "data"
+    (data_dir / TEST_DATA).mkdir(parents=True)
+    paths = []
+    for dataset in job.datasets:
+        path = data_dir / dataset.name
+        path.symlink_to(store.blob_path(dataset.sha256))
+        paths.append(path)
+    return fmu, paths
+
+
+def load_job_inputs(
+    store: JobStore, job: Job, workdir: Path, on_staged: Callable[[Path], None] | None = None
+) -> JobInputs:
+    """Stage the job's files in ``workdir`` and parse its spec, experiments and held-out data.
+
+    ``on_staged`` is called with the FMU's path once the files are staged, before anything is
+    parsed. A design job's one dataset is its experiment space (:mod:`fmuid.experiment_design`
+    is imported for such a job only).
+    """
+    from fmuid.data import load_experiment, spec_from_json
+
+    fmu, paths = stage_inputs(store, job, workdir)
+    if on_staged is not None:
+        on_staged(fmu)
+    spec = spec_from_json(job.spec, "spec")
+    tests = [load_experiment(p) for p in paths if p.parent.name == TEST_DATA]
+    data = [p for p in paths if p.parent.name != TEST_DATA]
+    if job.kind == "design":
+        from fmuid.experiment_design import load_space
+
+        return JobInputs(fmu, spec, [load_space(data[0])], tests)
+    return JobInputs(fmu, spec, [load_experiment(path) for path in data], tests)
