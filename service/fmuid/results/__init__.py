@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
 from fmuid.discrepancy.residual_tests import TestResult, Window
 from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis, EffectStep
@@ -68,8 +69,27 @@ def load_result(path: str | Path) -> Any:
         return result_from_dict(data)
     except KeyError as exc:
         raise SpecError(f"{path}: not a complete fmuid result: missing key {exc}") from exc
+    except ValidationError as exc:
+        raise SpecError(f"{path}: not a complete fmuid result: {_problems(exc)}") from exc
     except (TypeError, ValueError) as exc:
         raise SpecError(f"{path}: not a complete fmuid result: {exc}") from exc
+
+
+SHOWN = 6
+"""Problems of a result JSON named in the error; the rest are counted."""
+
+
+def _problems(exc: ValidationError) -> str:
+    """Return the schema's complaints in one line: each field's path and what is wrong."""
+    parts = []
+    for e in exc.errors()[:SHOWN]:
+        where = ".".join(str(x) for x in e["loc"])
+        if e["type"] == "missing":
+            parts.append(f"missing key '{e['loc'][-1]}' ({where})")
+        else:
+            parts.append(f"{where}: {e['msg']}")
+    more = len(exc.errors()) - SHOWN
+    return "; ".join(parts) + (f"; and {more} more" if more > 0 else "")
 
 
 def kind_of(data: dict[str, Any]) -> str:
