@@ -1,4 +1,4 @@
-"""A Python user's parallel profile: Ctrl-C stops it at once; a script without a guard runs once."""
+"""Parallel stages in Python: Ctrl-C stops them at once; a script without a guard runs once."""
 
 import json
 import signal
@@ -9,12 +9,16 @@ from pathlib import Path
 
 import pytest
 
+from design_cases import MSD_SPACE, MSD_SPEC
 from tractor_files import tractor_study
 
 SCRIPT = """
+import json
 import time
 import fmuid
 from fmuid.data import load_experiment, load_spec
+from fmuid.discrepancy import DiagnoseOptions
+from fmuid.experiment_design import space_from_json
 
 with open("runs.txt", "a") as runs:
     runs.write("run\\n")
@@ -26,13 +30,26 @@ def progress(event):
 
 
 try:
-    fmuid.profile({fmu!r}, [load_experiment("d.csv")], load_spec("s.json"), workers=2,
-                  progress=progress)
+    {call}
     print("finished", flush=True)
 except KeyboardInterrupt:
     print("KeyboardInterrupt", flush=True)
     input()  # stay alive while the test looks for workers
 """
+
+CALLS = {
+    "profile": 'fmuid.profile({fmu!r}, [load_experiment("d.csv")], load_spec("s.json"), '
+    "workers=2, progress=progress)",
+    "diagnose": 'fmuid.diagnose({fmu!r}, [load_experiment("d.csv")], load_spec("s.json"), '
+    "options=DiagnoseOptions(workers=2))",
+    "design": 'fmuid.design("msd", load_spec("s.json"), '
+    'space_from_json(open("space.json").read()), workers=2)',
+}
+"""What the script runs: each parallel stage of the Python toolkit on two local workers."""
+
+
+def _script(stage: str, fmu: Path | str) -> str:
+    return SCRIPT.replace("{call}", CALLS[stage].format(fmu=str(fmu)))
 
 
 def _grandchildren(pid: int) -> list[int]:
@@ -49,21 +66,47 @@ def _grandchildren(pid: int) -> list[int]:
     return [p for p, parent in parents.items() if parent in children]
 
 
+def _interruptible() -> None:
+    """Give the script the SIGINT a terminal or notebook has, however pytest itself was started.
+
+    A command started with ``&`` by a shell without job control (a CI script, ``nohup``)
+    inherits SIGINT ignored, and Python then installs no ``KeyboardInterrupt`` handler.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def _workers_of(proc: subprocess.Popen[str], timeout: float = 300.0) -> list[int]:
+    """Wait until the script's pool has its two workers; return their pids."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, "the script ended before its pool started"
+        workers = _grandchildren(proc.pid)
+        if len(workers) == 2:
+            return workers
+        time.sleep(0.05)
+    raise AssertionError(f"no two-worker pool within {timeout:.0f} s")
+
+
 @pytest.mark.slow
-def test_sigint_stops_a_two_worker_profile_and_its_workers(tractor_fmu, tmp_path):
-    tractor_study(tmp_path, tractor_fmu)
-    (tmp_path / "script.py").write_text(SCRIPT.format(fmu=str(tractor_fmu)))
+@pytest.mark.parametrize("stage", ["profile", "diagnose", "design"])
+def test_sigint_stops_a_two_worker_stage_and_its_workers(tractor_fmu, tmp_path, stage):
+    if stage == "design":
+        (tmp_path / "s.json").write_text(json.dumps(MSD_SPEC))
+        (tmp_path / "space.json").write_text(json.dumps(MSD_SPACE))
+    else:
+        tractor_study(tmp_path, tractor_fmu)
+    (tmp_path / "script.py").write_text(_script(stage, tractor_fmu))
     proc = subprocess.Popen(
         [sys.executable, "script.py"],
         cwd=tmp_path,
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
+        preexec_fn=_interruptible,
     )
     assert proc.stdout is not None and proc.stdin is not None
     try:
-        assert proc.stdout.readline().strip() == "walking"
-        assert len(_grandchildren(proc.pid)) == 2  # both workers walk branches
+        _workers_of(proc)
         proc.send_signal(signal.SIGINT)  # what a notebook's interrupt does: the kernel alone
         sent = time.monotonic()
         line = proc.stdout.readline()
@@ -96,7 +139,7 @@ def test_a_script_without_main_guard_runs_once(msd_parallel_fmu, tmp_path, run):
         "global_search": False,
     }
     (tmp_path / "s.json").write_text(json.dumps(spec))
-    (tmp_path / "script.py").write_text(SCRIPT.format(fmu=str(msd_parallel_fmu)))
+    (tmp_path / "script.py").write_text(_script("profile", msd_parallel_fmu))
     proc = subprocess.run(
         [sys.executable, *run], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )
