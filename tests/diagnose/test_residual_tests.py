@@ -27,6 +27,29 @@ def test_false_alarm_rate_of_the_family_is_at_most_the_design_level() -> None:
     assert alarms / trials <= 0.03
 
 
+def test_whiteness_of_fitted_residuals_is_calibrated_on_their_own_null() -> None:
+    # 101 samples less what 6 smooth sensitivities absorb: the fit correlates neighbours
+    rng = np.random.default_rng(0)
+    n, t = 101, np.linspace(0.0, 1.0, 101)
+    sines = np.sin(2 * np.pi * np.outer(t, [0.3, 0.7, 1.1, 1.9, 2.5, 3.3]) + rng.uniform(0, 6, 6))
+    basis = np.linalg.qr(sines)[0]
+
+    def fitted(draws: int) -> np.ndarray:
+        e = rng.standard_normal((draws, n))
+        return e - (e @ basis) @ basis.T
+
+    lags = rt.lb_lags(n)
+    null = rt.ljung_box_null(fitted(400), lags)
+    residuals = fitted(4000)
+    calibrated, _ = rt.whiteness_p(rt.ljung_box_null(residuals, lags), lags, null)
+    asymptotic, _ = rt.whiteness_p(rt.ljung_box_null(residuals, 20), 20)
+    # binomial(4000, 0.05): 0.03 and 0.07 are 5.8 sd away
+    assert 0.03 <= np.mean(calibrated < 0.05) <= 0.07
+    assert np.mean(asymptotic < 0.05) > 0.1  # chi2(20) at n // 5 lags: the test it replaces
+    one = rt.ljung_box(rt.Series("e", "y", t, residuals[0]), null=null)
+    assert one.p_value == calibrated[0]
+
+
 def test_whiteness_and_windows_and_spectrum_find_planted_structure() -> None:
     rng = np.random.default_rng(1)
     n = 150

@@ -37,6 +37,42 @@ def residual_series(
     return out
 
 
+NULL_DRAWS = 400
+"""Draws of the fit's null residuals that calibrate the whiteness test."""
+
+NULL_CHUNK = 50
+"""Draws simulated at once (memory: this many times the number of residuals)."""
+
+
+def whiteness_null(problem: Problem, jacobian: np.ndarray) -> dict[tuple[str, str], np.ndarray]:
+    """Null draws of each series' whiteness statistic for a fit with this ``jacobian``.
+
+    Under the model, the fit's weighted residuals are white noise less its projection on the
+    sensitivities of the weighted predictions; each draw is that (seeded), cut into the
+    problem's series (experiments, then outputs, as :meth:`Problem.residuals` orders them).
+    """
+    u, sv, _ = np.linalg.svd(np.asarray(jacobian, dtype=float), full_matrices=False)
+    q = u[:, sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)]
+    spans = []
+    start = 0
+    for i, exp in enumerate(problem.experiments):
+        for j, output in enumerate(problem.outputs):
+            n = int(np.count_nonzero(problem.masks[i][j]))
+            if n >= 8:
+                spans.append(((exp.name, output), slice(start, start + n), rt.lb_lags(n)))
+            start += n
+    if start != q.shape[0]:
+        return {}
+    rng = np.random.default_rng(0)
+    draws: dict[tuple[str, str], list[np.ndarray]] = {key: [] for key, _, _ in spans}
+    for k in range(0, NULL_DRAWS, NULL_CHUNK):
+        e = rng.standard_normal((min(NULL_CHUNK, NULL_DRAWS - k), start))
+        r = e - (e @ q) @ q.T
+        for key, rows, lags in spans:
+            draws[key].append(rt.ljung_box_null(r[:, rows], lags))
+    return {key: np.concatenate(v) for key, v in draws.items()}
+
+
 def sigma_known(problem: Problem) -> bool:
     """Whether every output's sigma is given (not estimated from the data)."""
     return all(m in ("given", "column") for m in problem.sigma_method.values())
@@ -46,7 +82,7 @@ def residual_tests(problem: Problem, fit: FitResult) -> list[rt.TestResult]:
     """Per-series residual tests of a fit and, when sigma is known, the global chi2 test."""
     series = residual_series(problem, fit.estimates)
     known = sigma_known(problem)
-    tests = rt.series_tests(series, known)
+    tests = rt.series_tests(series, known, whiteness_null(problem, fit.jacobian))
     if known:
         tests.append(rt.global_goodness_of_fit(fit.chi2, fit.n_data, problem.n_free))
     return tests
