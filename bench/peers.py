@@ -109,9 +109,14 @@ def run_pypesto(
     )
     result = pypesto.optimize.minimize(pproblem, optimizer, n_starts=1, progress_bar=False)
     result = pypesto.profile.parameter_profile(
-        pproblem, result, optimizer, engine=SingleCoreEngine(), profile_index=index,
-        profile_options=options, progress_bar=False,
-    )  # fmt: skip
+        pproblem,
+        result,
+        optimizer,
+        engine=SingleCoreEngine(),
+        profile_index=index,
+        profile_options=options,
+        progress_bar=False,
+    )
     ends: dict[str, dict[str, tuple[float | None, float | None]]] = {}
     for i in index:
         prof = result.profile_result.get_profiler_result(i_par=i)

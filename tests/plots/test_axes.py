@@ -41,10 +41,17 @@ def _gids(ax) -> list[str]:
 def _residual_series() -> list[ResidualSeries]:
     rng = np.random.default_rng(3)
     return [
-        ResidualSeries(exp, "x", T, np.sin(T) + 0.1 * rng.standard_normal(T.size), np.sin(T),
-                       rng.standard_normal(T.size), unit="m")
+        ResidualSeries(
+            exp,
+            "x",
+            T,
+            np.sin(T) + 0.1 * rng.standard_normal(T.size),
+            np.sin(T),
+            rng.standard_normal(T.size),
+            unit="m",
+        )
         for exp in ("step", "ramp")
-    ]  # fmt: skip
+    ]
 
 
 def _band() -> TrajectoryBand:
@@ -140,14 +147,31 @@ def diagnosis_inputs(msd_fmu: Path) -> tuple[Diagnosis, DiagnosisSeries]:
     ]
     series = DiagnosisSeries(problem, outputs, outputs, residuals, residuals)
     diagnosis = Diagnosis(
-        mismatch=True, false_alarm=0.01, evidence=(), tests_before=(), tests_after=(),
-        location={"frequency_hz": [1.0, 2.0], "time_windows": [[1.0, 2.0]], "outputs": ["v"],
-                  "experiments": [problem.experiments[1].name]},
-        windows=(Window(problem.experiments[0].name, "x", 0.0, 10.0, 3.0),), effect="output_lag",
-        description="", candidates=(), added_parameters={}, chi2_before=1.0, chi2_after=1.0,
-        n_data=164, lrt_p_value=None, bic_before=1.0, bic_after=1.0,
-        parameters_before={"k": 4.0}, parameters_after={"k": 4.0},
-    )  # fmt: skip
+        mismatch=True,
+        false_alarm=0.01,
+        evidence=(),
+        tests_before=(),
+        tests_after=(),
+        location={
+            "frequency_hz": [1.0, 2.0],
+            "time_windows": [[1.0, 2.0]],
+            "outputs": ["v"],
+            "experiments": [problem.experiments[1].name],
+        },
+        windows=(Window(problem.experiments[0].name, "x", 0.0, 10.0, 3.0),),
+        effect="output_lag",
+        description="",
+        candidates=(),
+        added_parameters={},
+        chi2_before=1.0,
+        chi2_after=1.0,
+        n_data=164,
+        lrt_p_value=None,
+        bic_before=1.0,
+        bic_after=1.0,
+        parameters_before={"k": 4.0},
+        parameters_after={"k": 4.0},
+    )
     return diagnosis, series
 
 

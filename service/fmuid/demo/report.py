@@ -159,7 +159,7 @@ def write_study_report(
             "n_data",
             "wall time",
             *(with_unit(n, units.get(n)) for n in names),
-        ],  # fmt: skip
+        ],
         [
             [
                 r.design.name,

@@ -155,9 +155,13 @@ def run_engine(
                     ) from exc
             if kind == "design":
                 return fmuid.design(
-                    fmu, spec, experiments[0], progress=progress, executor=executor,
+                    fmu,
+                    spec,
+                    experiments[0],
+                    progress=progress,
+                    executor=executor,
                     checkpoint=checkpoint,
-                )  # fmt: skip
+                )
             return fmuid.profile(
                 fmu, experiments, spec, progress=progress, executor=executor, test_data=tests
             )
@@ -183,9 +187,15 @@ def run_job(
         try:
             inputs = load_job_inputs(store, job, Path(tmp), on_staged=_log_fmi_version)
             result = run_engine(
-                job.kind, inputs.fmu, inputs.experiments, inputs.spec, progress, dask,
-                checkpoint, inputs.test_data,
-            )  # fmt: skip
+                job.kind,
+                inputs.fmu,
+                inputs.experiments,
+                inputs.spec,
+                progress,
+                dask,
+                checkpoint,
+                inputs.test_data,
+            )
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:
             store.fail(job.id, str(exc))

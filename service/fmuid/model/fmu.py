@@ -195,10 +195,12 @@ class FmuModel:
         self.model_description: ModelDescription = description
         self.interfaces = tuple(
             name
-            for name, part in ((CO_SIMULATION, description.coSimulation),
-                               (MODEL_EXCHANGE, description.modelExchange))
+            for name, part in (
+                (CO_SIMULATION, description.coSimulation),
+                (MODEL_EXCHANGE, description.modelExchange),
+            )
             if part is not None
-        )  # fmt: skip
+        )
         self.interface = _choose_interface(self.path, self.interfaces, interface)
         self.model_name: str = description.modelName
         self.fmi_version: str = version
@@ -308,9 +310,11 @@ class FmuModel:
 
         """
         problems = []
-        roles = (("parameters", free, self.parameters, ("float",)),
-                 ("inputs", inputs, self.inputs, USABLE["input"]),
-                 ("outputs", outputs, self.outputs, USABLE["output"]))  # fmt: skip
+        roles = (
+            ("parameters", free, self.parameters, ("float",)),
+            ("inputs", inputs, self.inputs, USABLE["input"]),
+            ("outputs", outputs, self.outputs, USABLE["output"]),
+        )
         for field, names, table, kinds in roles:
             for name in names:
                 v = table.get(name)
