@@ -9,6 +9,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.demo.compilation import ci_compilation_figure, ci_entries_from_profile
 from fmuid.discrepancy.residual_tests import Series, Window
 from fmuid.discrepancy.result import Diagnosis
 from fmuid.discrepancy.series import DiagnosisSeries
@@ -16,8 +17,6 @@ from fmuid.estimation.series import ResidualSeries
 from fmuid.experiment_design.discriminate import Discrimination
 from fmuid.experiment_design.signals import Trial
 from fmuid.plots import (
-    ci_compilation_figure,
-    ci_entries_from_profile,
     diagnosis_fit_figure,
     diagnosis_residual_figure,
     diagnosis_spectrum_figure,
