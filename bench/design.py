@@ -72,9 +72,12 @@ def make_space(sigma: float, args: argparse.Namespace, extra_sensors: bool = Fal
     outputs = {"gam_t": {"sigma": sigma}, "gam_i": {"sigma": sigma}}
     if extra_sensors:
         outputs |= {
-            "psi_t": {"sigma": 0.005}, "psi_i": {"sigma": 0.005},
-            "y_tc": {"sigma": 0.02}, "y_ic": {"sigma": 0.02}, "v_tc": {"sigma": 0.02},
-        }  # fmt: skip
+            "psi_t": {"sigma": 0.005},
+            "psi_i": {"sigma": 0.005},
+            "y_tc": {"sigma": 0.02},
+            "y_ic": {"sigma": 0.02},
+            "v_tc": {"sigma": 0.02},
+        }
     doc = {
         "input": "delta",
         "families": {
@@ -82,17 +85,25 @@ def make_space(sigma: float, args: argparse.Namespace, extra_sensors: bool = Fal
             "ramp": {"amplitude": amp, "start": [0.5, 3.0], "rise": [0.2, 2.0]},
             "chirp": {"f0": [0.05, 0.5], "f1": [0.3, 2.0], "amplitude": amp},
             "multisine": {
-                "f_min": [0.05, 0.3], "f_max": [0.5, 2.0], "amplitude": amp, "tones": [2, 8]
+                "f_min": [0.05, 0.3],
+                "f_max": [0.5, 2.0],
+                "amplitude": amp,
+                "tones": [2, 8],
             },
             "double_lane_change": {"amplitude": amp, "duration": [1.0, 3.0]},
         },
-        "duration": 10.0, "rates_hz": [5, 10], "outputs": outputs,
-        "base_outputs": ["gam_t", "gam_i"], "max_sensors": 3 if extra_sensors else 2,
-        "longest_test": 10.0, "candidates": args.candidates,
-        "verify_designs": 0 if extra_sensors else args.verify, "draws": args.draws,
+        "duration": 10.0,
+        "rates_hz": [5, 10],
+        "outputs": outputs,
+        "base_outputs": ["gam_t", "gam_i"],
+        "max_sensors": 3 if extra_sensors else 2,
+        "longest_test": 10.0,
+        "candidates": args.candidates,
+        "verify_designs": 0 if extra_sensors else args.verify,
+        "draws": args.draws,
         "robust": {"points": args.points, "box": {n: [v / 1.5, v * 1.5] for n, v in box}},
         "seed": 0,
-    }  # fmt: skip
+    }
     return space_from_json(json.dumps(doc), "bench space")
 
 

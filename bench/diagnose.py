@@ -190,9 +190,10 @@ def main() -> None:
     parser.add_argument("--log", type=Path, default=None, help="append JSON lines here")
     parser.add_argument("--table", type=Path, nargs="+", help="print the tables of logs")
     parser.add_argument(
-        "--no-absorbed", action="store_true",
+        "--no-absorbed",
+        action="store_true",
         help="skip the re-profiles of the original parameters (they do not enter the tables)",
-    )  # fmt: skip
+    )
     parser.add_argument(
         "--skip-done", type=Path, default=None, help="skip the cases already diagnosed in this log"
     )

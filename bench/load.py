@@ -55,8 +55,11 @@ def write_csv(path: Path, end: float = 10.0, step: float = 0.2) -> None:
     t = np.arange(0.0, end + 1e-9, step)
     sol = solve_ivp(
         lambda _t, y: [y[1], (40.0 - 1.6 * y[1] - 4.4 * y[0]) / 1.1],
-        (0.0, end), [0.0, 0.0], t_eval=t, rtol=1e-10,
-    )  # fmt: skip
+        (0.0, end),
+        [0.0, 0.0],
+        t_eval=t,
+        rtol=1e-10,
+    )
     x = sol.y[0] + np.random.default_rng(0).normal(0.0, 0.2, t.size)
     path.write_text("time,f,x\n" + "".join(f"{a:.6g},40,{b:.9g}\n" for a, b in zip(t, x)))
 

@@ -11,7 +11,7 @@ C_atf's upper simultaneous end lies in a second, lower valley). fmuid runs twice
 checked fit; pyPESTO profiles the bench's parameters from the same fit, and the ratios of the
 last table are fmuid's second run over tuned pyPESTO's. Every pointwise and simultaneous CI end
 is compared with an exact reference crossing computed here by root-finding on multi-start scipy
-re-fits (``tests/profiles/reference.py``). pyPESTO runs tuned (trust-region least squares on the
+re-fits (``tests/profiling/reference.py``). pyPESTO runs tuned (trust-region least squares on the
 residuals, the simultaneous threshold as its stop ratio, shorter steps) and, with
 ``--defaults``, with its defaults (L-BFGS-B, finite-difference gradients, ``ProfileOptions()``).
 Simulations count FMU runs (pyPESTO's through a module-level counter in its objective
@@ -109,9 +109,14 @@ def run_pypesto(
     )
     result = pypesto.optimize.minimize(pproblem, optimizer, n_starts=1, progress_bar=False)
     result = pypesto.profile.parameter_profile(
-        pproblem, result, optimizer, engine=SingleCoreEngine(), profile_index=index,
-        profile_options=options, progress_bar=False,
-    )  # fmt: skip
+        pproblem,
+        result,
+        optimizer,
+        engine=SingleCoreEngine(),
+        profile_index=index,
+        profile_options=options,
+        progress_bar=False,
+    )
     ends: dict[str, dict[str, tuple[float | None, float | None]]] = {}
     for i in index:
         prof = result.profile_result.get_profiler_result(i_par=i)

@@ -40,10 +40,13 @@ PUBLISHED = {
 """Linear model -> model with the cubic spring (free-run RMS, the benchmark's MODEL.md)."""
 
 STUDIES = {
-    "silverbox": ("msd", "silverbox_msd.json", ["silverbox_test_multisine.csv",
-                                                "silverbox_test_arrow.csv"]),
+    "silverbox": (
+        "msd",
+        "silverbox_msd.json",
+        ["silverbox_test_multisine.csv", "silverbox_test_arrow.csv"],
+    ),
     "emps": ("emps", "emps.json", ["emps_test.csv"]),
-}  # fmt: skip
+}
 
 
 def _converter() -> object:
@@ -69,11 +72,19 @@ def run(name: str, data: Path, estimation: str, out: Path) -> list[list[str]]:
     named = ", ".join(e["label"] for e in result["effects"]) or str(result["effect"])
     rows = []
     for v in result["validation"]:
-        rows.append([
-            name, str(len(train.time)), v["experiment"], v["output"], f"{v['rms_base']:.4g}",
-            f"{v['rms_final']:.4g}", PUBLISHED.get((name, v["experiment"]), "-"), named,
-            f"{seconds:.0f}",
-        ])  # fmt: skip
+        rows.append(
+            [
+                name,
+                str(len(train.time)),
+                v["experiment"],
+                v["output"],
+                f"{v['rms_base']:.4g}",
+                f"{v['rms_final']:.4g}",
+                PUBLISHED.get((name, v["experiment"]), "-"),
+                named,
+                f"{seconds:.0f}",
+            ]
+        )
     return rows
 
 
@@ -94,8 +105,17 @@ def main() -> None:
     rows = []
     for name in [args.only] if args.only else list(STUDIES):
         rows += run(name, data, estimation[name], args.out)
-    header = ["benchmark", "samples", "test set", "output", "textbook RMS", "after diagnosis",
-              "published", "effects", "s"]  # fmt: skip
+    header = [
+        "benchmark",
+        "samples",
+        "test set",
+        "output",
+        "textbook RMS",
+        "after diagnosis",
+        "published",
+        "effects",
+        "s",
+    ]
     print("| " + " | ".join(header) + " |")  # noqa: T201
     print("|" + "---|" * len(header))  # noqa: T201
     for row in rows:

@@ -72,10 +72,16 @@ LOOP_CASES = [  # (label, built-in name or Reference-FMU file, input, outputs, s
     ("msd", "msd", "f", ["x", "v"], 65062, None),
     ("msd + feedback, 1 ms steps", "msd", "f", ["x", "v"], 4000, FRICTION),
     ("tractor_implement", "tractor_implement", "delta", ["gam_t", "gam_i"], 4000, None),
-    ("Feedthrough FMI 2.0 CS", "fmi2/Feedthrough.fmu", "Float64_continuous_input",
-     ["Float64_continuous_output"], 4000, None),
+    (
+        "Feedthrough FMI 2.0 CS",
+        "fmi2/Feedthrough.fmu",
+        "Float64_continuous_input",
+        ["Float64_continuous_output"],
+        4000,
+        None,
+    ),
     ("VanDerPol FMI 3.0 CS", "fmi3/VanDerPol.fmu", None, ["x0", "x1"], 4000, None),
-]  # fmt: skip
+]
 
 
 def loop_rows() -> list[tuple[str, int, float, float, float]]:
@@ -105,11 +111,15 @@ def loop_rows() -> list[tuple[str, int, float, float, float]]:
 def print_loops() -> None:
     """Print the per-sample table."""
     print(f"master loop per sample, {RATE:g} Hz records, an input sample at every output sample")  # noqa: T201
-    print(f"{'FMU':<26} {'samples':>8} {'native us':>10} {'Python us':>10} {'speed-up':>9} "  # noqa: T201
-          f"{'max |diff|':>11}")  # fmt: skip
+    print(
+        f"{'FMU':<26} {'samples':>8} {'native us':>10} {'Python us':>10} {'speed-up':>9} "  # noqa: T201
+        f"{'max |diff|':>11}"
+    )
     for label, n, native, python, diff in loop_rows():
-        print(f"{label:<26} {n:>8} {native * 1e6:>10.3f} {python * 1e6:>10.2f} "  # noqa: T201
-              f"{python / native:>8.0f}x {diff:>11.2g}")  # fmt: skip
+        print(
+            f"{label:<26} {n:>8} {native * 1e6:>10.3f} {python * 1e6:>10.2f} "  # noqa: T201
+            f"{python / native:>8.0f}x {diff:>11.2g}"
+        )
 
 
 def median_seconds(run: Callable[[], object], runs: int) -> float:
@@ -138,9 +148,13 @@ def tractor_rows() -> list[tuple[str, str, float]]:
 
     def plain() -> object:
         return fmpy.simulate_fmu(
-            unzipdir, model_description=description, stop_time=10.0, output_interval=0.2,
-            input=signal, output=OUTPUTS,
-        )  # fmt: skip
+            unzipdir,
+            model_description=description,
+            stop_time=10.0,
+            output_interval=0.2,
+            input=signal,
+            output=OUTPUTS,
+        )
 
     hosted = HostedSimulator(path, runs_per_process=HOSTED_RECYCLE)
 
@@ -150,9 +164,12 @@ def tractor_rows() -> list[tuple[str, str, float]]:
     rows = [
         ("tractor_implement (fmuid Simulator)", sim.input_handling, median_seconds(ours, RUNS)),
         ("tractor_implement (fmpy.simulate_fmu)", "fmpy", median_seconds(plain, RUNS)),
-        (f"tractor_implement (HostedSimulator, {HOSTED_RECYCLE} runs/process)",
-         hosted.instances, median_seconds(fresh, RUNS)),
-    ]  # fmt: skip
+        (
+            f"tractor_implement (HostedSimulator, {HOSTED_RECYCLE} runs/process)",
+            hosted.instances,
+            median_seconds(fresh, RUNS),
+        ),
+    ]
     start = time.perf_counter()
     for _ in range(RUNS):
         fresh()
@@ -197,8 +214,13 @@ def pythonfmu_rows(runs: int) -> list[tuple[str, str, float]]:
             seconds = median_seconds(
                 lambda u=u: sim.simulate({}, INPUT_TIME, {"u": u}, OUTPUT_TIME, ["y"]), runs
             )
-            rows.append((f"pythonfmu FirstOrder, {label} ({sim.model.kind_label})",
-                         sim.input_handling, seconds))  # fmt: skip
+            rows.append(
+                (
+                    f"pythonfmu FirstOrder, {label} ({sim.model.kind_label})",
+                    sim.input_handling,
+                    seconds,
+                )
+            )
         sim.close()
     return rows
 

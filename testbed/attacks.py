@@ -204,5 +204,12 @@ def make_attack(name: str, msd: Path, workdir: Path, variables: int) -> Attack:
     return makers[name]()
 
 
-ATTACKS = ("redos-1000", "redos-8000", "columns-20k", "keys-20k", "nesting-100k", "corrupt-zip",
-           "fmu-1M")  # fmt: skip
+ATTACKS = (
+    "redos-1000",
+    "redos-8000",
+    "columns-20k",
+    "keys-20k",
+    "nesting-100k",
+    "corrupt-zip",
+    "fmu-1M",
+)

@@ -46,17 +46,28 @@ TOLERANCE = 1.1
 CODE: dict[str | None, int] = {None: 0, **{e: i + 1 for i, e in enumerate(ft.EFFECTS)}}
 """Per-effect stream of the random draws (``None``: controls)."""
 FIRST_STRENGTH = {
-    "output_lag": 0.05, "input_delay": 0.05, "input_lag": 0.05, "input_offset": 0.001,
-    "output_bias": 0.001, "tire_saturation": 10.0, "side_slope": 0.03, "hitch_stiffness": 5000.0,
+    "output_lag": 0.05,
+    "input_delay": 0.05,
+    "input_lag": 0.05,
+    "input_offset": 0.001,
+    "output_bias": 0.001,
+    "tire_saturation": 10.0,
+    "side_slope": 0.03,
+    "hitch_stiffness": 5000.0,
     "aligning_torque": 0.05,
-}  # fmt: skip
+}
 """Where the search starts (strength units: see :func:`magnitude_of`)."""
 STRENGTH_RANGE = {
-    "output_lag": (1e-4, 1.0), "input_delay": (1e-4, 1.0), "input_lag": (1e-4, 1.0),
-    "input_offset": (1e-6, 0.1), "output_bias": (1e-6, 0.1), "tire_saturation": (0.5, 500.0),
-    "side_slope": (1e-5, 0.5), "hitch_stiffness": (1.0, 1e6),
+    "output_lag": (1e-4, 1.0),
+    "input_delay": (1e-4, 1.0),
+    "input_lag": (1e-4, 1.0),
+    "input_offset": (1e-6, 0.1),
+    "output_bias": (1e-6, 0.1),
+    "tire_saturation": (0.5, 500.0),
+    "side_slope": (1e-5, 0.5),
+    "hitch_stiffness": (1.0, 1e6),
     "aligning_torque": (1e-4, 2.0),
-}  # fmt: skip
+}
 SIGNED = ("input_offset", "output_bias", "side_slope")
 
 
@@ -248,13 +259,20 @@ def save(case: ConcealedCase, directory: Path) -> None:
     """Write the CSV files and ``truth.json`` into ``directory``."""
     case.case.write(directory)
     truth = {
-        "version": VERSION, "effect": case.case.effect, "seed": case.seed,
-        "magnitude": case.case.magnitude, "truth": case.case.truth,
-        "bias_output": case.case.bias_output, "snr": case.case.snr,
+        "version": VERSION,
+        "effect": case.case.effect,
+        "seed": case.seed,
+        "magnitude": case.case.magnitude,
+        "truth": case.case.truth,
+        "bias_output": case.case.bias_output,
+        "snr": case.case.snr,
         "experiments": [e.name for e in case.case.experiments],
-        "target_lambda": case.target_lambda, "achieved_lambda": case.achieved_lambda,
-        "attempts": case.attempts, "concealed": case.concealed, "check": case.check,
-    }  # fmt: skip
+        "target_lambda": case.target_lambda,
+        "achieved_lambda": case.achieved_lambda,
+        "attempts": case.attempts,
+        "concealed": case.concealed,
+        "check": case.check,
+    }
     (directory / "truth.json").write_text(json.dumps(truth, indent=1) + "\n")
 
 
@@ -269,9 +287,14 @@ def load(directory: Path) -> ConcealedCase | None:
     experiments = [load_experiment(directory / name) for name in t["experiments"]]
     case = ft.Case(t["effect"], t["magnitude"], t["truth"], experiments, t["bias_output"], t["snr"])
     return ConcealedCase(
-        case, t["seed"], t["target_lambda"], t["achieved_lambda"], t["attempts"], t["check"],
+        case,
+        t["seed"],
+        t["target_lambda"],
+        t["achieved_lambda"],
+        t["attempts"],
+        t["check"],
         t["concealed"],
-    )  # fmt: skip
+    )
 
 
 def get_case(effect: str | None, seed: int, cache: Path | None = None) -> ConcealedCase:

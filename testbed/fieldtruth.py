@@ -40,23 +40,46 @@ G = 9.81
 """Gravity [m/s2]."""
 
 NOMINAL = {
-    "C_atf": 220000.0, "C_atr": 486000.0, "C_air": 167000.0,
-    "sig_tf": 0.5, "sig_tr": 1.0, "sig_ir": 0.5,
-    "m_t": 9391.0, "m_i": 2127.0, "I_tz": 35709.0, "I_iz": 6402.0,
-    "u_tc": 4.5, "a": 1.7, "b": 1.2, "c": 2.1, "d": 3.62, "e": 0.1,
-}  # fmt: skip
+    "C_atf": 220000.0,
+    "C_atr": 486000.0,
+    "C_air": 167000.0,
+    "sig_tf": 0.5,
+    "sig_tr": 1.0,
+    "sig_ir": 0.5,
+    "m_t": 9391.0,
+    "m_i": 2127.0,
+    "I_tz": 35709.0,
+    "I_iz": 6402.0,
+    "u_tc": 4.5,
+    "a": 1.7,
+    "b": 1.2,
+    "c": 2.1,
+    "d": 3.62,
+    "e": 0.1,
+}
 """Thesis parameter values (contract table)."""
 
 BOUNDS = {
-    "C_atf": (10000.0, 700000.0), "C_atr": (10000.0, 700000.0), "C_air": (10000.0, 700000.0),
-    "sig_tf": (0.1, 2.0), "sig_tr": (0.1, 2.0), "sig_ir": (0.1, 2.0),
-}  # fmt: skip
+    "C_atf": (10000.0, 700000.0),
+    "C_atr": (10000.0, 700000.0),
+    "C_air": (10000.0, 700000.0),
+    "sig_tf": (0.1, 2.0),
+    "sig_tr": (0.1, 2.0),
+    "sig_ir": (0.1, 2.0),
+}
 """Thesis Table 3.2 bounds of the six free tire parameters."""
 
 EFFECTS = (
-    "output_lag", "input_delay", "input_lag", "input_offset", "output_bias",
-    "tire_saturation", "side_slope", "hitch_stiffness", "aligning_torque",
-)  # fmt: skip
+    "output_lag",
+    "input_delay",
+    "input_lag",
+    "input_offset",
+    "output_bias",
+    "tire_saturation",
+    "side_slope",
+    "hitch_stiffness",
+    "aligning_torque",
+)
 
 UNCATALOGUED = ("hitch_stiffness", "aligning_torque")
 """Effects that no catalogue candidate models: a right diagnosis says ``unexplained``."""
@@ -225,9 +248,15 @@ def simulate_truth(
     t_span = (float(min(input_time[0], output_time[0])), float(output_time[-1]))
     max_step = float(np.min(np.diff(input_time)))
     sol = solve_ivp(
-        rhs, t_span, s0, method="LSODA", t_eval=output_time, rtol=1e-9, atol=1e-11,
+        rhs,
+        t_span,
+        s0,
+        method="LSODA",
+        t_eval=output_time,
+        rtol=1e-9,
+        atol=1e-11,
         max_step=max_step,
-    )  # fmt: skip
+    )
     if not sol.success:
         raise RuntimeError(f"field truth integration failed: {sol.message}")
     k = 8 + (tau_delta > 0)

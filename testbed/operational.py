@@ -47,10 +47,14 @@ FINE_STEP = 0.02
 SWITCHED = {"tire_saturation": "alpha_sat", "side_slope": "slope"}
 """Effects that are FMU parameters (off at 0)."""
 AUGMENTATION_BOUNDS = {
-    "output_lag": (0.0, 1.0), "input_delay": (0.0, 1.0), "input_lag": (0.0, 1.0),
-    "input_offset": (-0.1, 0.1), "output_bias": (-0.1, 0.1),
-    "tire_saturation": (1e-3, 2.0), "side_slope": (-0.5, 0.5),
-}  # fmt: skip
+    "output_lag": (0.0, 1.0),
+    "input_delay": (0.0, 1.0),
+    "input_lag": (0.0, 1.0),
+    "input_offset": (-0.1, 0.1),
+    "output_bias": (-0.1, 0.1),
+    "tire_saturation": (1e-3, 2.0),
+    "side_slope": (-0.5, 0.5),
+}
 """Bounds of the added parameter of each catalogued effect (its unit)."""
 
 
@@ -205,9 +209,17 @@ def augmented_fit(
         return np.concatenate(parts)
 
     res = least_squares(
-        residuals, x0, bounds=(lower, upper), method="trf", x_scale="jac", diff_step=1e-6,
-        ftol=1e-10, xtol=1e-10, gtol=1e-10, max_nfev=200,
-    )  # fmt: skip
+        residuals,
+        x0,
+        bounds=(lower, upper),
+        method="trf",
+        x_scale="jac",
+        diff_step=1e-6,
+        ftol=1e-10,
+        xtol=1e-10,
+        gtol=1e-10,
+        max_nfev=200,
+    )
     return float(res.fun @ res.fun), float(res.x[-1])
 
 
@@ -263,12 +275,18 @@ class Check:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
         return {
-            "chi2_base": self.chi2_base, "n_data": self.n_data, "n_free": self.n_free,
-            "reduced_chi2": self.reduced_chi2, "band": list(self.band),
-            "ljung_box": self.ljung_box, "chi2_augmented": self.chi2_augmented,
-            "lrt_p": self.lrt_p, "magnitude_fit": self.magnitude_fit, "base": self.base,
+            "chi2_base": self.chi2_base,
+            "n_data": self.n_data,
+            "n_free": self.n_free,
+            "reduced_chi2": self.reduced_chi2,
+            "band": list(self.band),
+            "ljung_box": self.ljung_box,
+            "chi2_augmented": self.chi2_augmented,
+            "lrt_p": self.lrt_p,
+            "magnitude_fit": self.magnitude_fit,
+            "base": self.base,
             "failures": self.failures(),
-        }  # fmt: skip
+        }
 
 
 def check_case(
@@ -297,7 +315,12 @@ def check_case(
     if effect in AUGMENTATION_BOUNDS:
         chi2_aug, m_fit = augmented_fit(experiments, effect, fit.estimates, magnitude, bias_output)
     return Check(
-        chi2_base=float(fit.chi2), n_data=problem.n_data, n_free=problem.n_free,
-        band=chi2_band(problem.n_data, problem.n_free), ljung_box=lb,
-        chi2_augmented=chi2_aug, magnitude_fit=m_fit, base=dict(fit.estimates),
-    )  # fmt: skip
+        chi2_base=float(fit.chi2),
+        n_data=problem.n_data,
+        n_free=problem.n_free,
+        band=chi2_band(problem.n_data, problem.n_free),
+        ljung_box=lb,
+        chi2_augmented=chi2_aug,
+        magnitude_fit=m_fit,
+        base=dict(fit.estimates),
+    )

@@ -8,6 +8,7 @@ module ``a.b.c`` when that is a module, else to ``a.b``.
 The layers, lowest first; a module may import its own layer and lower ones only::
 
     fmuid (version, lazy facade) / errors / progress / frames (pandas tables) / provenance /
+      processes (process hygiene: die with the parent, kill a group, cap memory) /
       readable (how numbers read)
       < data
       < model
@@ -35,7 +36,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "service" / "fmuid"
 
 LAYERS = [
-    {"fmuid", "errors", "progress", "frames", "provenance", "readable"},
+    {"fmuid", "errors", "progress", "frames", "provenance", "readable", "processes"},
     {"data"},
     {"model"},
     {"formats"},

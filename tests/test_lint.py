@@ -1,4 +1,4 @@
-"""Ruff (with the D and T20 rules) and mypy over the package, as STYLE.md asks of CI."""
+"""Ruff (lint with the D and T20 rules, and format) and mypy over the package, as STYLE.md asks."""
 
 import subprocess
 import sys
@@ -13,6 +13,11 @@ def run(*args):
 
 def test_ruff_clean():
     proc = run("ruff", "check", ".")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_ruff_format_clean():
+    proc = run("ruff", "format", "--check", "service", "tests", "bench", "testbed")
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 

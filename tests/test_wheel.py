@@ -92,8 +92,19 @@ def test_installed_wheel_runs_info_fit_and_serve(installed, tmp_path):
     assert str(cached[0]) in fmuid("info", "msd", "--json")
     assert not (tmp_path / "fmus").exists()
 
-    fmuid("fit", "--fmu", "msd", "--data", "step.csv", "--spec", "spec.json", "--out", "fit.json",
-          "--report", "report")  # fmt: skip
+    fmuid(
+        "fit",
+        "--fmu",
+        "msd",
+        "--data",
+        "step.csv",
+        "--spec",
+        "spec.json",
+        "--out",
+        "fit.json",
+        "--report",
+        "report",
+    )
     assert "k" in (tmp_path / "fit.json").read_text()
     assert "Verdict" in (tmp_path / "report" / "index.html").read_text()  # templates shipped
 

@@ -220,9 +220,11 @@ def info_text(info: ModelInfo) -> str:
             found = "simulates at its start values; " + (
                 "repeated runs are equal" if h.deterministic else "repeated runs DIFFER"
             )
-            found += {True: "; a reset run equals a fresh instance's", None: "",
-                      False: "; its reset is UNRELIABLE (fmuid gives every run a fresh instance)"
-                      }[h.reset_reliable]  # fmt: skip
+            found += {
+                True: "; a reset run equals a fresh instance's",
+                None: "",
+                False: "; its reset is UNRELIABLE (fmuid gives every run a fresh instance)",
+            }[h.reset_reliable]
             if h.ignored:
                 found += f"; it IGNORES the parameters {', '.join(h.ignored)} that fmuid sets"
         parts.append(f"\nhealth ({start:g}-{stop:g} s): {found}")

@@ -142,9 +142,12 @@ def simulate(
     y = simulator.simulate(values, input_time, input_values, experiment.time, outputs)
     seen = {n: _input_at(experiment.time, input_time, input_values[n], n in held) for n in inputs}
     return Simulation(
-        experiment.time, seen, dict(zip(outputs, y.T, strict=True)), model,
+        experiment.time,
+        seen,
+        dict(zip(outputs, y.T, strict=True)),
+        model,
         simulator.input_handling,
-    )  # fmt: skip
+    )
 
 
 def _input_at(
@@ -216,13 +219,19 @@ def fit(
         problem, global_search=spec.global_search, seed=spec.seed, progress=progress
     )
     options = {
-        "stage": "fit", "global_search": spec.global_search, "interface": spec.interface,
+        "stage": "fit",
+        "global_search": spec.global_search,
+        "interface": spec.interface,
         "test_data": [e.name for e in test_data],
-    }  # fmt: skip
+    }
     return provenance.record(
-        _validated(problem, result, test_data), fmu_sha256=problem.model.sha256, spec=spec,
-        experiments=[*experiments, *test_data], options=options, started=started,
-    )  # fmt: skip
+        _validated(problem, result, test_data),
+        fmu_sha256=problem.model.sha256,
+        spec=spec,
+        experiments=[*experiments, *test_data],
+        options=options,
+        started=started,
+    )
 
 
 def profile(
@@ -269,12 +278,15 @@ def profile(
 
     problem = problem or make_problem(fmu, experiments, spec)
     options = {
-        "stage": "profile", "global_search": spec.global_search, "interface": spec.interface,
-        "confidence": spec.confidence, "workers": workers,
+        "stage": "profile",
+        "global_search": spec.global_search,
+        "interface": spec.interface,
+        "confidence": spec.confidence,
+        "workers": workers,
         "executor": None if executor is None else type(executor).__name__,
         "fit": "given" if fit is not None else "fitted here",
         "test_data": [e.name for e in test_data],
-    }  # fmt: skip
+    }
     _check_test_data(problem, test_data)
     if fit is None:
         fit = fit_problem(
@@ -284,9 +296,13 @@ def profile(
     if test_data:
         result = replace(result, fit=_validated(problem, result.fit, test_data))
     return provenance.record(
-        result, fmu_sha256=problem.model.sha256, spec=spec,
-        experiments=[*experiments, *test_data], options=options, started=started,
-    )  # fmt: skip
+        result,
+        fmu_sha256=problem.model.sha256,
+        spec=spec,
+        experiments=[*experiments, *test_data],
+        options=options,
+        started=started,
+    )
 
 
 def _check_test_data(problem: Problem, test_data: Sequence[Experiment]) -> None:

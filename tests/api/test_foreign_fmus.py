@@ -30,9 +30,14 @@ SPEC = {
 def vdp_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
     t = np.round(np.arange(0.0, 10.0 + 1e-9, 0.2), 10)
     sol = solve_ivp(
-        lambda _, x: [x[1], 1.3 * (1 - x[0] ** 2) * x[1] - x[0]], (0, 10), [2.0, 0.0],
-        t_eval=t, rtol=1e-12, atol=1e-12, method="DOP853",
-    )  # fmt: skip
+        lambda _, x: [x[1], 1.3 * (1 - x[0] ** 2) * x[1] - x[0]],
+        (0, 10),
+        [2.0, 0.0],
+        t_eval=t,
+        rtol=1e-12,
+        atol=1e-12,
+        method="DOP853",
+    )
     x0 = sol.y[0] + np.random.default_rng(1).normal(0.0, 0.02, t.size)
     path = tmp_path_factory.mktemp("vdp") / "vdp.csv"
     np.savetxt(path, np.column_stack([t, x0]), delimiter=",", header="time,x0", comments="")
@@ -79,8 +84,9 @@ def test_spec_interface_over_http(service, vdp_csv: Path) -> None:
     if not (both.is_file() and only_me.is_file()):
         pytest.skip(f"Reference-FMUs absent in {REFERENCE_DIR} (set FMUID_REFERENCE_FMUS)")
     client = service.client()
-    job = client.submit("fit", json.dumps({**SPEC, "interface": "model_exchange"}), [vdp_csv],
-                        fmu_path=both)  # fmt: skip
+    job = client.submit(
+        "fit", json.dumps({**SPEC, "interface": "model_exchange"}), [vdp_csv], fmu_path=both
+    )
     status = client.wait(job, timeout=600)
     assert status["status"] == "done", status
     remote = client.result(job)

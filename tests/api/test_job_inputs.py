@@ -28,10 +28,15 @@ def test_experiments_and_held_out_data_are_told_apart(tmp_path: Path, msd_fmu: P
         files[name] = tmp_path / name
         files[name].write_text(f"time,f,x\n0,1,0\n1,1,{x}\n")
     job = store.create(
-        "fit", SPEC, store.add_file(fmu), "msd",
-        [Dataset("step.csv", store.add_file(files["step.csv"])),
-         Dataset(f"{TEST_DATA}/later.csv", store.add_file(files["later.csv"]))],
-    )  # fmt: skip
+        "fit",
+        SPEC,
+        store.add_file(fmu),
+        "msd",
+        [
+            Dataset("step.csv", store.add_file(files["step.csv"])),
+            Dataset(f"{TEST_DATA}/later.csv", store.add_file(files["later.csv"])),
+        ],
+    )
     work = tmp_path / "work"
     work.mkdir()
     inputs = load_job_inputs(store, job, work)

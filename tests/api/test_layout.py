@@ -42,9 +42,13 @@ def test_a_job_owns_every_per_job_path_and_no_shared_one(tmp_path):
     layout = DataLayout(tmp_path)
     owned = set(layout.job_files("j1"))
     named = {
-        layout.log("j1"), layout.report("j1"), layout.report_marker("j1"),
-        layout.report_error("j1"), layout.checkpoint("j1"), layout.job_tmp("j1"),
-    }  # fmt: skip
+        layout.log("j1"),
+        layout.report("j1"),
+        layout.report_marker("j1"),
+        layout.report_error("j1"),
+        layout.checkpoint("j1"),
+        layout.job_tmp("j1"),
+    }
     assert owned == named
     assert not any(p.is_relative_to(layout.blobs) for p in owned)
 

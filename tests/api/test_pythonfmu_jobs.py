@@ -38,10 +38,14 @@ def test_pythonfmu_profile_over_http(service: Service, first_order_fmu: Path, tm
     y = 2.0 * (1 - np.exp(-T / 0.5)) + np.random.default_rng(3).normal(0, 0.02, T.size)
     csv = _csv(tmp_path / "lag.csv", {"u": np.ones(T.size), "y": y})
     spec = {
-        "parameters": {"K": {"start": 1.0, "lower": 0.1, "upper": 10.0},
-                       "tau": {"start": 1.0, "lower": 0.05, "upper": 5.0}},
-        "inputs": ["u"], "outputs": {"y": {"sigma": 0.02}}, "global_search": False,
-    }  # fmt: skip
+        "parameters": {
+            "K": {"start": 1.0, "lower": 0.1, "upper": 10.0},
+            "tau": {"start": 1.0, "lower": 0.05, "upper": 5.0},
+        },
+        "inputs": ["u"],
+        "outputs": {"y": {"sigma": 0.02}},
+        "global_search": False,
+    }
     remote = _profile_over_http(service, spec, csv, first_order_fmu)
     local = fmuid.profile(
         first_order_fmu, [load_experiment(csv)], spec_from_json(json.dumps(spec)), workers=1
@@ -64,8 +68,11 @@ def test_unreliable_reset_over_http(
     interval equals the built-in msd's (the same physics with a working reset)."""
     _, x = msd_step_response()
     csv = _csv(tmp_path / "step.csv", {"f": np.ones(T.size), "x": x})
-    spec = {"parameters": {"k": {"start": 3.0, "lower": 0.5, "upper": 20.0}},
-            "outputs": {"x": {"sigma": 0.005}}, "global_search": False}  # fmt: skip
+    spec = {
+        "parameters": {"k": {"start": 3.0, "lower": 0.5, "upper": 20.0}},
+        "outputs": {"x": {"sigma": 0.005}},
+        "global_search": False,
+    }
     service = service_factory(FMUID_RECYCLE_RUNS="10")
     remote = _profile_over_http(service, spec, csv, leaky_reset_fmu)
     assert remote["fmu"]["instances"].endswith("replaced every 10 runs")
@@ -83,6 +90,13 @@ def test_unreliable_reset_over_http(
 
 def msd_step_response() -> tuple[np.ndarray, np.ndarray]:
     """x of m x'' + b x' + k x = 1 (m, k, b = 1.1, 4.4, 1.6) from rest, plus seeded noise."""
-    sol = solve_ivp(lambda _, s: [s[1], (1 - 1.6 * s[1] - 4.4 * s[0]) / 1.1], (0, T[-1]), [0, 0],
-                    t_eval=T, rtol=1e-11, atol=1e-13, method="DOP853")  # fmt: skip
+    sol = solve_ivp(
+        lambda _, s: [s[1], (1 - 1.6 * s[1] - 4.4 * s[0]) / 1.1],
+        (0, T[-1]),
+        [0, 0],
+        t_eval=T,
+        rtol=1e-11,
+        atol=1e-13,
+        method="DOP853",
+    )
     return T, sol.y[0] + np.random.default_rng(5).normal(0, 0.005, T.size)

@@ -91,10 +91,21 @@ def test_diagnose_writes_the_verdict_and_a_report(msd_fmu, tmp_path, capsys):
     spec = write(tmp_path / "spec.json", json.dumps(SPEC))
     out = tmp_path / "diagnosis.json"
     code, stdout, err = run(
-        ["diagnose", "--fmu", msd_fmu, "--data", data, "--spec", spec, "--out", out,
-         "--report", tmp_path / "report"],
+        [
+            "diagnose",
+            "--fmu",
+            msd_fmu,
+            "--data",
+            data,
+            "--spec",
+            spec,
+            "--out",
+            out,
+            "--report",
+            tmp_path / "report",
+        ],
         capsys,
-    )  # fmt: skip
+    )
     assert code == 0, err
     result = json.loads(out.read_text())
     assert result["mismatch"] is False
@@ -103,9 +114,20 @@ def test_diagnose_writes_the_verdict_and_a_report(msd_fmu, tmp_path, capsys):
     # input has two levels, so no saturation level lies inside the range it reaches)
     labels = {next(iter(c["parameters"])) for c in result["candidates"]}
     assert labels == {
-        "tau_outputs", "delay_f", "tau_f", "offset_f", "gain_f", "dead_f", "bias_x",
-        "gain_x", "max_x", "min_x", "c2_x_f", "c3_x_f", "coulomb_v_f",
-    }  # fmt: skip
+        "tau_outputs",
+        "delay_f",
+        "tau_f",
+        "offset_f",
+        "gain_f",
+        "dead_f",
+        "bias_x",
+        "gain_x",
+        "max_x",
+        "min_x",
+        "c2_x_f",
+        "c3_x_f",
+        "coulomb_v_f",
+    }
     page = (tmp_path / "report" / "index.html").read_text()
     assert "Verdict" in page and result["verdict"] in page
 

@@ -28,9 +28,13 @@ def _frame(events, width=80):
 
 
 def test_six_parameters_keep_bar_count_and_clock_in_80_columns():
-    lines = _frame([Progress("fit", 25, 25, "genetic algorithm"),
-                    Progress("refine", 37, 0, "start 1/2, chi2 1234, 412 simulations"),
-                    Progress("profile", 12, 240, SIX)])  # fmt: skip
+    lines = _frame(
+        [
+            Progress("fit", 25, 25, "genetic algorithm"),
+            Progress("refine", 37, 0, "start 1/2, chi2 1234, 412 simulations"),
+            Progress("profile", 12, 240, SIX),
+        ]
+    )
     assert len(lines) == 3 and all(len(line) <= 80 for line in lines)
     fit, refine, profile = (line.split() for line in lines)
     assert fit[:3] == ["fit", "\u2501" * 12, "25/25"] and fit[3] == "0:00:00"

@@ -62,9 +62,13 @@ def test_info_says_what_runs_at_the_start_values_showed(builtin_dir, leaky_reset
     code, out, err = run(["info", "msd", "--json"], capsys)
     assert code == 0, err
     assert json.loads(out)["health"] == {
-        "simulates": True, "deterministic": True, "reset_reliable": True,
-        "horizon_s": [0.0, 10.0], "message": "", "ignored": [],
-    }  # fmt: skip
+        "simulates": True,
+        "deterministic": True,
+        "reset_reliable": True,
+        "horizon_s": [0.0, 10.0],
+        "message": "",
+        "ignored": [],
+    }
     code, out, err = run(["info", leaky_reset_fmu], capsys)
     assert code == 0, err
     assert "its reset is UNRELIABLE" in out

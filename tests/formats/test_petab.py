@@ -99,8 +99,11 @@ def test_petab_round_trip_same_problem_same_result(study, msd_fmu, tmp_path):
     for name, p in spec.parameters.items():
         q = back.spec.parameters[name]
         assert (q.start, q.lower, q.upper, q.resolved_scale) == (
-            p.start, p.lower, p.upper, p.resolved_scale,
-        )  # fmt: skip
+            p.start,
+            p.lower,
+            p.upper,
+            p.resolved_scale,
+        )
     assert [e.name for e in back.experiments] == ["sine.csv", "2nd run.csv"]
     for a, b in zip(experiments, back.experiments, strict=True):
         np.testing.assert_array_equal(a.time, b.time)

@@ -110,8 +110,12 @@ def test_cli_exports_a_fit_and_starts_from_it(profiled, msd_fmu, tmp_path, capsy
     args = ["--fmu", str(msd_fmu), "--data", str(data), "--spec", str(tmp_path / "spec.json")]
     assert main(["fit", *args, "--out", str(tmp_path / "r.json")]) == 0
     ssv = tmp_path / "r.ssv"
-    assert main(["export-ssv", "--result", str(tmp_path / "r.json"), "--fmu", "msd",
-                 "--out", str(ssv)]) == 0  # fmt: skip
+    assert (
+        main(
+            ["export-ssv", "--result", str(tmp_path / "r.json"), "--fmu", "msd", "--out", str(ssv)]
+        )
+        == 0
+    )
     assert read_ssv(ssv).units["k"] == "N/m"
     assert main(["fit", *args, "--start", str(ssv), "--out", str(tmp_path / "r2.json")]) == 0
     first, second = (json.loads((tmp_path / n).read_text()) for n in ("r.json", "r2.json"))

@@ -28,23 +28,49 @@ def dask_cluster(tmp_path):
     log = open(tmp_path / "dask.log", "ab")  # noqa: SIM115 - closed below
     started = [
         subprocess.Popen(
-            [*dask, "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
-             "--dashboard-address", ":0", "--scheduler-file", str(scheduler_file)],
-            stdout=log, stderr=log, start_new_session=True,
+            [
+                *dask,
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--dashboard-address",
+                ":0",
+                "--scheduler-file",
+                str(scheduler_file),
+            ],
+            stdout=log,
+            stderr=log,
+            start_new_session=True,
         )
-    ]  # fmt: skip
+    ]
     try:
         assert wait_until(scheduler_file.exists, 60), (tmp_path / "dask.log").read_text()
         address = json.loads(scheduler_file.read_text())["address"]
         workers = [
             subprocess.Popen(
-                [*dask, "distributed.cli.dask_worker", address, "--nthreads", "1",
-                 "--nworkers", "1", "--no-nanny", "--host", "127.0.0.1",
-                 "--dashboard-address", ":0"],
-                stdout=log, stderr=log, start_new_session=True, env=dict(os.environ),
+                [
+                    *dask,
+                    "distributed.cli.dask_worker",
+                    address,
+                    "--nthreads",
+                    "1",
+                    "--nworkers",
+                    "1",
+                    "--no-nanny",
+                    "--host",
+                    "127.0.0.1",
+                    "--dashboard-address",
+                    ":0",
+                ],
+                stdout=log,
+                stderr=log,
+                start_new_session=True,
+                env=dict(os.environ),
             )
             for _ in range(2)
-        ]  # fmt: skip
+        ]
         started += workers
         yield address
     finally:

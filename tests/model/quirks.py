@@ -63,10 +63,21 @@ def build_framework_fmu(name: str, out_dir: Path) -> Path:
     library = build / f"{name}.so"
     headers = Path(os.path.dirname(fmpy.__file__)) / "c-code"
     subprocess.run(
-        ["gcc", "-shared", "-fPIC", "-O2", f"-I{headers}", f"-I{build}", "-o", str(library),
-         str(build / "all.c"), "-lm"],
-        check=True, capture_output=True,
-    )  # fmt: skip
+        [
+            "gcc",
+            "-shared",
+            "-fPIC",
+            "-O2",
+            f"-I{headers}",
+            f"-I{build}",
+            "-o",
+            str(library),
+            str(build / "all.c"),
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+    )
     target = out_dir / f"{name}.fmu"
     with zipfile.ZipFile(target, "w") as archive:
         archive.write(build / "modelDescription.xml", "modelDescription.xml")

@@ -12,17 +12,33 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 NOMINAL = {
-    "C_atf": 220000.0, "C_atr": 486000.0, "C_air": 167000.0,
-    "sig_tf": 0.5, "sig_tr": 1.0, "sig_ir": 0.5,
-    "m_t": 9391.0, "m_i": 2127.0, "I_tz": 35709.0, "I_iz": 6402.0,
-    "u_tc": 4.5, "a": 1.7, "b": 1.2, "c": 2.1, "d": 3.62, "e": 0.1,
-}  # fmt: skip
+    "C_atf": 220000.0,
+    "C_atr": 486000.0,
+    "C_air": 167000.0,
+    "sig_tf": 0.5,
+    "sig_tr": 1.0,
+    "sig_ir": 0.5,
+    "m_t": 9391.0,
+    "m_i": 2127.0,
+    "I_tz": 35709.0,
+    "I_iz": 6402.0,
+    "u_tc": 4.5,
+    "a": 1.7,
+    "b": 1.2,
+    "c": 2.1,
+    "d": 3.62,
+    "e": 0.1,
+}
 
 # Table 3.2 bounds of the six tire parameters.
 BOUNDS = {
-    "C_atf": (10000.0, 700000.0), "C_atr": (10000.0, 700000.0), "C_air": (10000.0, 700000.0),
-    "sig_tf": (0.1, 2.0), "sig_tr": (0.1, 2.0), "sig_ir": (0.1, 2.0),
-}  # fmt: skip
+    "C_atf": (10000.0, 700000.0),
+    "C_atr": (10000.0, 700000.0),
+    "C_air": (10000.0, 700000.0),
+    "sig_tf": (0.1, 2.0),
+    "sig_tr": (0.1, 2.0),
+    "sig_ir": (0.1, 2.0),
+}
 
 OUTPUTS = ("gam_t", "gam_i", "psi_t", "psi_i", "v_tc", "x_tc", "y_tc", "x_ic", "y_ic")
 RAMP_TIME = np.array([0.0, 1.0, 1.5, 10.0])
@@ -44,16 +60,18 @@ def tractor_matrices(p: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.nd
         [-mi * c, it + mi * c**2, mi * c * d],
         [-mi * d, mi * c * d, ii + mi * d**2],
     ]
-    n = np.array([
-        [0, -(mt + mi) * u, 0, -cf, -cr, -ci, 0, 0],
-        [0, mi * c * u, 0, -a * cf, b * cr, c * ci, 0, 0],
-        [0, mi * d * u, 0, 0, 0, (d + e) * ci, 0, 0],
-        [1 / sf, a / sf, 0, -u / sf, 0, 0, 0, 0],
-        [1 / sr, -b / sr, 0, 0, -u / sr, 0, 0, 0],
-        [1 / si, -c / si, -(d + e) / si, 0, 0, -u / si, u / si, -u / si],
-        [0, 1, 0, 0, 0, 0, 0, 0],
-        [0, 0, 1, 0, 0, 0, 0, 0],
-    ])  # fmt: skip
+    n = np.array(
+        [
+            [0, -(mt + mi) * u, 0, -cf, -cr, -ci, 0, 0],
+            [0, mi * c * u, 0, -a * cf, b * cr, c * ci, 0, 0],
+            [0, mi * d * u, 0, 0, 0, (d + e) * ci, 0, 0],
+            [1 / sf, a / sf, 0, -u / sf, 0, 0, 0, 0],
+            [1 / sr, -b / sr, 0, 0, -u / sr, 0, 0, 0],
+            [1 / si, -c / si, -(d + e) / si, 0, 0, -u / si, u / si, -u / si],
+            [0, 1, 0, 0, 0, 0, 0, 0],
+            [0, 0, 1, 0, 0, 0, 0, 0],
+        ]
+    )
     pvec = np.array([0, 0, 0, -u / sf, 0, 0, 0, 0])
     return m, n, pvec
 
@@ -104,18 +122,30 @@ def tractor_reference(
         mask = (output_time > t0) & (output_time <= t1)
         t_eval = np.unique(np.append(output_time[mask], t1))
         sol = solve_ivp(
-            rhs, (t0, t1), state, method="DOP853", rtol=1e-10, atol=1e-12,
-            t_eval=t_eval, args=(delta0, rate, t0),
-        )  # fmt: skip
+            rhs,
+            (t0, t1),
+            state,
+            method="DOP853",
+            rtol=1e-10,
+            atol=1e-12,
+            t_eval=t_eval,
+            args=(delta0, rate, t0),
+        )
         assert sol.success, sol.message
         states[mask] = sol.y.T[np.searchsorted(t_eval, output_time[mask])]
         state = sol.y[:, -1]
     v, gt, gi, pt, pi, xt, yt = (states[:, k] for k in (0, 1, 2, 6, 7, 8, 9))
     return {
-        "v_tc": v, "gam_t": gt, "gam_i": gi, "psi_t": pt, "psi_i": pi, "x_tc": xt, "y_tc": yt,
+        "v_tc": v,
+        "gam_t": gt,
+        "gam_i": gi,
+        "psi_t": pt,
+        "psi_i": pi,
+        "x_tc": xt,
+        "y_tc": yt,
         "x_ic": xt - c * np.cos(pt) - d * np.cos(pi),
         "y_ic": yt - c * np.sin(pt) - d * np.sin(pi),
-    }  # fmt: skip
+    }
 
 
 def tractor_yaw_rates_exact(

@@ -31,8 +31,9 @@ def tanks(params: dict[str, float], inflow: tuple[np.ndarray, np.ndarray]) -> np
         flow = h[0] / r1
         return [(np.interp(t, *inflow) - flow) / c1, (flow - h[1] / r2) / c2]
 
-    sol = solve_ivp(rhs, (0.0, 4.0), [0.0, 0.0], t_eval=TIMES, rtol=1e-10, atol=1e-12,
-                    max_step=0.01)  # fmt: skip
+    sol = solve_ivp(
+        rhs, (0.0, 4.0), [0.0, 0.0], t_eval=TIMES, rtol=1e-10, atol=1e-12, max_step=0.01
+    )
     return sol.y.T
 
 

@@ -11,9 +11,16 @@ from scipy.integrate import solve_ivp
 from fmuid.model.simulator import Simulator
 
 START = {
-    "M": 95.11, "Fv": 0.0, "Fc": 0.0, "v_c": 1e-3, "offset": 0.0, "gtau": 35.15, "kp": 160.18,
-    "kv": 243.45, "vir_max": 10.0,
-}  # fmt: skip
+    "M": 95.11,
+    "Fv": 0.0,
+    "Fc": 0.0,
+    "v_c": 1e-3,
+    "offset": 0.0,
+    "gtau": 35.15,
+    "kp": 160.18,
+    "kv": 243.45,
+    "vir_max": 10.0,
+}
 T = np.round(np.arange(8001) * 2.5e-4, 10)
 CORNERS = np.array([0.0, 0.4, 0.9, 1.4, 2.0])
 Q_CORNERS = np.array([0.0, 0.01, 0.01, -0.0025, -0.0025])
@@ -38,9 +45,16 @@ def reference(params: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndar
     for segment, (t0, t1) in enumerate(zip(CORNERS[:-1], CORNERS[1:], strict=True)):
         inside = (T >= t0) & (T < t1) if segment < len(CORNERS) - 2 else T >= t0
         sol = solve_ivp(
-            rhs, (t0, t1), state, t_eval=T[inside], method="DOP853", rtol=1e-12, atol=1e-14,
-            args=(segment,), dense_output=True,
-        )  # fmt: skip
+            rhs,
+            (t0, t1),
+            state,
+            t_eval=T[inside],
+            method="DOP853",
+            rtol=1e-12,
+            atol=1e-14,
+            args=(segment,),
+            dense_output=True,
+        )
         state = sol.sol(t1)
         q.append(sol.y[0])
         v.append(sol.y[1])

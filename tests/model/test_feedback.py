@@ -24,8 +24,9 @@ def _reference(t: np.ndarray, u: np.ndarray) -> np.ndarray:
         f += CD * (x - np.clip(x, -BAND, BAND))
         return [v, (f - B * v - K * x) / M]
 
-    sol = solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12,
-                    max_step=0.005)  # fmt: skip
+    sol = solve_ivp(
+        rhs, (t[0], t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12, max_step=0.005
+    )
     return sol.y[0]
 
 
@@ -91,14 +92,14 @@ def test_inputs_between_the_fine_points_keep_a_finite_difference_rate_stable(
     t_out = np.arange(0.0, 2.0, 0.01)
     terms = (FeedbackTerm("f", "x", True, "tanh", FC, WIDTH),)
     sim = Simulator(msd_fmu)
-    y = sim.simulate({"m": M, "k": K, "b": B}, t_in, {"f": u}, t_out, ["x"],
-                     Feedback(terms, 0.002))  # fmt: skip
+    y = sim.simulate({"m": M, "k": K, "b": B}, t_in, {"f": u}, t_out, ["x"], Feedback(terms, 0.002))
     sim.close()
 
     def rhs(tt: float, s: np.ndarray) -> list[float]:
         x, v = s
         return [v, (np.interp(tt, t_in, u) + FC * np.tanh(v / WIDTH) - B * v - K * x) / M]
 
-    sol = solve_ivp(rhs, (0.0, t_out[-1]), [0.0, 0.0], t_eval=t_out, rtol=1e-10, atol=1e-12,
-                    max_step=0.001)  # fmt: skip
+    sol = solve_ivp(
+        rhs, (0.0, t_out[-1]), [0.0, 0.0], t_eval=t_out, rtol=1e-10, atol=1e-12, max_step=0.001
+    )
     assert np.max(np.abs(y[:, 0] - sol.y[0])) < 0.02 * np.max(np.abs(sol.y[0]))

@@ -18,17 +18,39 @@ from fmuid.model.fmu import FmuModel
 
 CONTRACT_START = {
     "tractor_implement": {
-        "C_atf": 220000, "C_atr": 486000, "C_air": 167000, "sig_tf": 0.5, "sig_tr": 1.0,
-        "sig_ir": 0.5, "m_t": 9391, "m_i": 2127, "I_tz": 35709, "I_iz": 6402, "u_tc": 4.5,
-        "a": 1.7, "b": 1.2, "c": 2.1, "d": 3.62, "e": 0.1, "alpha_sat": 0.0, "slope": 0.0,
+        "C_atf": 220000,
+        "C_atr": 486000,
+        "C_air": 167000,
+        "sig_tf": 0.5,
+        "sig_tr": 1.0,
+        "sig_ir": 0.5,
+        "m_t": 9391,
+        "m_i": 2127,
+        "I_tz": 35709,
+        "I_iz": 6402,
+        "u_tc": 4.5,
+        "a": 1.7,
+        "b": 1.2,
+        "c": 2.1,
+        "d": 3.62,
+        "e": 0.1,
+        "alpha_sat": 0.0,
+        "slope": 0.0,
     },
     "msd": {"m": 1.1, "k": 4.4, "b": 1.6},
     "msd_parallel": {"m": 1.1, "k1": 3.0, "k2": 1.4, "b": 1.6},
     "emps": {
-        "M": 95.11, "Fv": 0.0, "Fc": 0.0, "v_c": 0.001, "offset": 0.0, "gtau": 35.15,
-        "kp": 160.18, "kv": 243.45, "vir_max": 10.0,
+        "M": 95.11,
+        "Fv": 0.0,
+        "Fc": 0.0,
+        "v_c": 0.001,
+        "offset": 0.0,
+        "gtau": 35.15,
+        "kp": 160.18,
+        "kv": 243.45,
+        "vir_max": 10.0,
     },
-}  # fmt: skip
+}
 CONTRACT_IO = {
     "tractor_implement": (
         ["delta"],

@@ -37,10 +37,17 @@ def _reference() -> np.ndarray:
         rate = (f1 - f0) / (t1 - t0)
         inside = T_OUT[(T_OUT >= t0) & (T_OUT < t1)]
         sol = solve_ivp(
-            lambda t, s, t0=t0, f0=f0, rate=rate: [s[1], (f0 + rate * (t - t0) - B * s[1]
-                                                          - K * s[0]) / M],
-            (t0, t1), x, t_eval=np.append(inside, t1), rtol=1e-12, atol=1e-12, method="DOP853",
-        )  # fmt: skip
+            lambda t, s, t0=t0, f0=f0, rate=rate: [
+                s[1],
+                (f0 + rate * (t - t0) - B * s[1] - K * s[0]) / M,
+            ],
+            (t0, t1),
+            x,
+            t_eval=np.append(inside, t1),
+            rtol=1e-12,
+            atol=1e-12,
+            method="DOP853",
+        )
         out.extend(sol.y[0][:-1])
         x = sol.y[:, -1]
     return np.append(out, x[0])

@@ -22,8 +22,15 @@ T = np.round(np.arange(0.0, 6.0 + 1e-9, 0.2), 10)
 
 def _exact() -> np.ndarray:
     """x0 of VanDerPol with mu = 1.3 from (2, 0) (scipy, independent of the FMU)."""
-    sol = solve_ivp(lambda _, x: [x[1], 1.3 * (1 - x[0] ** 2) * x[1] - x[0]], (0, T[-1]),
-                    [2.0, 0.0], t_eval=T, rtol=1e-12, atol=1e-12, method="DOP853")  # fmt: skip
+    sol = solve_ivp(
+        lambda _, x: [x[1], 1.3 * (1 - x[0] ** 2) * x[1] - x[0]],
+        (0, T[-1]),
+        [2.0, 0.0],
+        t_eval=T,
+        rtol=1e-12,
+        atol=1e-12,
+        method="DOP853",
+    )
     return sol.y[0]
 
 
@@ -66,8 +73,9 @@ def test_an_interface_the_fmu_lacks_is_a_spec_error(vdp: Experiment) -> None:
 def test_cli_interface_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     both = reference_fmu("fmi2", "VanDerPol")
     data = tmp_path / "vdp.csv"
-    np.savetxt(data, np.column_stack([T, np.zeros(T.size)]), delimiter=",",
-               header="time,x0", comments="")  # fmt: skip
+    np.savetxt(
+        data, np.column_stack([T, np.zeros(T.size)]), delimiter=",", header="time,x0", comments=""
+    )
     spec = tmp_path / "spec.json"
     spec.write_text(
         json.dumps(
@@ -109,6 +117,13 @@ def test_simulate_takes_the_interface_from_a_fixed_only_spec(
     me_error = np.max(np.abs(rows["model_exchange"] - exact))
     assert me_error < 1e-5 < np.max(np.abs(rows["co_simulation"] - exact))  # CS: Euler steps
     spec.write_text(json.dumps({"fixed": {}, "interface": "cvode"}))
-    assert main([str(a) for a in ["simulate", "--fmu", both, "--data", data, "--spec", spec,
-                                  "--out", out]]) == 2  # fmt: skip
+    assert (
+        main(
+            [
+                str(a)
+                for a in ["simulate", "--fmu", both, "--data", data, "--spec", spec, "--out", out]
+            ]
+        )
+        == 2
+    )
     assert "interface: 'cvode' is not one of" in capsys.readouterr().err

@@ -72,8 +72,12 @@ def _scipy_profiles(y: np.ndarray) -> dict[str, tuple[float, float]]:
         return float(np.sum(((y - _step(k, tau)) / SIGMA) ** 2))
 
     def best_tau(k: float) -> float:
-        opt = minimize_scalar(lambda lt: chi2(k, np.exp(lt)), bounds=(np.log(0.05), np.log(5)),
-                              method="bounded", options={"xatol": 1e-12})  # fmt: skip
+        opt = minimize_scalar(
+            lambda lt: chi2(k, np.exp(lt)),
+            bounds=(np.log(0.05), np.log(5)),
+            method="bounded",
+            options={"xatol": 1e-12},
+        )
         return float(opt.fun)
 
     def best_k(tau: float) -> float:
@@ -81,8 +85,9 @@ def _scipy_profiles(y: np.ndarray) -> dict[str, tuple[float, float]]:
         return chi2(float(g @ y / (g @ g)), tau)
 
     def interval(profile: Callable[[float], float], guess: float) -> tuple[float, float]:
-        opt = minimize_scalar(profile, bounds=(guess / 2, guess * 2), method="bounded",
-                              options={"xatol": 1e-12})  # fmt: skip
+        opt = minimize_scalar(
+            profile, bounds=(guess / 2, guess * 2), method="bounded", options={"xatol": 1e-12}
+        )
         level = opt.fun + chi2_dist.ppf(0.68, 1)
         lo = brentq(lambda v: profile(v) - level, guess / 2, opt.x, xtol=1e-12)
         hi = brentq(lambda v: profile(v) - level, opt.x, guess * 2, xtol=1e-12)

@@ -26,9 +26,14 @@ T = np.round(np.arange(0.0, 10.0 + 1e-9, 0.2), 10)
 
 def _van_der_pol(mu: float) -> np.ndarray:
     sol = solve_ivp(
-        lambda _, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]], (0, T[-1]), [2.0, 0.0],
-        t_eval=T, rtol=1e-12, atol=1e-12, method="DOP853",
-    )  # fmt: skip
+        lambda _, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]],
+        (0, T[-1]),
+        [2.0, 0.0],
+        t_eval=T,
+        rtol=1e-12,
+        atol=1e-12,
+        method="DOP853",
+    )
     return sol.y[0]
 
 
@@ -93,10 +98,13 @@ def test_integer_and_boolean_columns_in_a_fit() -> None:
     t = np.round(np.arange(0.0, 2.0 + 1e-9, 0.1), 10)
     steps = np.where(t < 1.0, 2.0, 5.0)
     columns = {
-        "Int32_input": steps, "Int32_output": steps,
-        "Boolean_input": (t >= 0.5).astype(float), "Boolean_output": (t >= 0.5).astype(float),
-        "Float64_continuous_input": t, "Float64_continuous_output": t,
-    }  # fmt: skip
+        "Int32_input": steps,
+        "Int32_output": steps,
+        "Boolean_input": (t >= 0.5).astype(float),
+        "Boolean_output": (t >= 0.5).astype(float),
+        "Float64_continuous_input": t,
+        "Float64_continuous_output": t,
+    }
     data = experiment_from_arrays("types.csv", t, columns)
     body = {
         "parameters": {"Float64_tunable_parameter": {"start": 1.0, "lower": 0.0, "upper": 2.0}},

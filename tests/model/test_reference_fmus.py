@@ -48,14 +48,19 @@ def test_simulates_like_fmpy(version: str, interface: str, name: str) -> None:
     y = sim.simulate({}, np.array([0.0]), {}, T, outputs)
     me = interface == ME
     ref = fmpy.simulate_fmu(
-        str(sim.path), fmi_type=interface, stop_time=T[-1], output_interval=0.1,
-        relative_tolerance=1e-10 if me else None, output=outputs,
-    )  # fmt: skip
+        str(sim.path),
+        fmi_type=interface,
+        stop_time=T[-1],
+        output_interval=0.1,
+        relative_tolerance=1e-10 if me else None,
+        output=outputs,
+    )
     expected = np.column_stack([np.interp(T, ref["time"], ref[o]) for o in outputs])
     if name == "BouncingBall" and me:  # fmpy records both sides of each bounce
         _, last = np.unique(ref["time"], return_index=True)
-        expected = np.column_stack([ref[o][last][np.searchsorted(ref["time"][last], T)]
-                                    for o in outputs])  # fmt: skip
+        expected = np.column_stack(
+            [ref[o][last][np.searchsorted(ref["time"][last], T)] for o in outputs]
+        )
     np.testing.assert_allclose(y, expected, rtol=0, atol=1e-5 if me else 1e-12)
     assert sim.reset_reliable
     np.testing.assert_array_equal(sim.simulate({}, np.array([0.0]), {}, T, outputs), y)
@@ -79,9 +84,14 @@ def test_van_der_pol_model_exchange_against_solve_ivp(version: str) -> None:
     t = np.linspace(0.0, 10.0, 51)
     y = sim.simulate({"mu": 1.3}, np.array([0.0]), {}, t, ["x0", "x1"])
     sol = solve_ivp(
-        lambda _, x: [x[1], 1.3 * (1 - x[0] ** 2) * x[1] - x[0]], (0, 10), [2.0, 0.0],
-        t_eval=t, rtol=1e-12, atol=1e-12, method="DOP853",
-    )  # fmt: skip
+        lambda _, x: [x[1], 1.3 * (1 - x[0] ** 2) * x[1] - x[0]],
+        (0, 10),
+        [2.0, 0.0],
+        t_eval=t,
+        rtol=1e-12,
+        atol=1e-12,
+        method="DOP853",
+    )
     np.testing.assert_allclose(y, sol.y.T, rtol=0, atol=1e-5)
 
 
@@ -168,9 +178,11 @@ def test_string_values_are_set_as_text(version: str) -> None:
 def test_usage_problems_name_field_and_type() -> None:
     model = fmu_module.FmuModel(reference_fmu("fmi2", "Feedthrough"))
     problems = model.usage_problems(
-        ["Float64_tunable_parameter"], {"Float64_fixed_parameter": "text"},
-        ["String_input"], ["Int32_output", "String_output"],
-    )  # fmt: skip
+        ["Float64_tunable_parameter"],
+        {"Float64_fixed_parameter": "text"},
+        ["String_input"],
+        ["Int32_output", "String_output"],
+    )
     assert problems == [
         "inputs.String_input: 'String_input' is a String input, which fmuid cannot use there "
         "(inputs must be Real/Float, Integer, Enumeration or Boolean scalars)",

@@ -39,8 +39,15 @@ LIMIT = 40  # instances per process (model.c)
 
 def _msd(k: float) -> np.ndarray:
     """Position of m x'' + b x' + k x = 1 from rest (scipy, independent of the FMU)."""
-    sol = solve_ivp(lambda _, s: [s[1], (1.0 - B * s[1] - k * s[0]) / M], (0, T[-1]), [0, 0],
-                    t_eval=T, rtol=1e-11, atol=1e-13, method="DOP853")  # fmt: skip
+    sol = solve_ivp(
+        lambda _, s: [s[1], (1.0 - B * s[1] - k * s[0]) / M],
+        (0, T[-1]),
+        [0, 0],
+        t_eval=T,
+        rtol=1e-11,
+        atol=1e-13,
+        method="DOP853",
+    )
     return sol.y[0]
 
 
@@ -88,8 +95,12 @@ def _data(k: float = 4.4) -> Experiment:
 
 
 def _spec(**fixed: float) -> fmuid.data.Spec:
-    body = {"parameters": {"k": {"start": 3.0, "lower": 0.5, "upper": 20.0}}, "fixed": fixed,
-            "outputs": {"x": {"sigma": SIGMA}}, "global_search": False}  # fmt: skip
+    body = {
+        "parameters": {"k": {"start": 3.0, "lower": 0.5, "upper": 20.0}},
+        "fixed": fixed,
+        "outputs": {"x": {"sigma": SIGMA}},
+        "global_search": False,
+    }
     return spec_from_json(json.dumps(body))
 
 
@@ -117,8 +128,10 @@ def _scipy_interval(data: Experiment) -> tuple[float, float]:
 
     best = minimize_scalar(chi2, bounds=(3.0, 6.0), method="bounded", options={"xatol": 1e-9})
     level = best.fun + chi2_dist.ppf(0.68, 1)
-    return (brentq(lambda k: chi2(k) - level, 3.0, best.x, xtol=1e-10),
-            brentq(lambda k: chi2(k) - level, best.x, 6.0, xtol=1e-10))  # fmt: skip
+    return (
+        brentq(lambda k: chi2(k) - level, 3.0, best.x, xtol=1e-10),
+        brentq(lambda k: chi2(k) - level, best.x, 6.0, xtol=1e-10),
+    )
 
 
 def test_profile_with_recycled_workers(fresh_copy: Path, monkeypatch: pytest.MonkeyPatch) -> None:

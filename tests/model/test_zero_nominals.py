@@ -25,8 +25,14 @@ def zero_nominals_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def oscillator(k: float, c: float) -> np.ndarray:
     """x and v of x'' = -k x - c x', x(0) = 1, v(0) = 0, by solve_ivp."""
-    sol = solve_ivp(lambda t, y: [y[1], -k * y[0] - c * y[1]], (0.0, 4.0), [1.0, 0.0],
-                    t_eval=TIMES, rtol=1e-11, atol=1e-13)  # fmt: skip
+    sol = solve_ivp(
+        lambda t, y: [y[1], -k * y[0] - c * y[1]],
+        (0.0, 4.0),
+        [1.0, 0.0],
+        t_eval=TIMES,
+        rtol=1e-11,
+        atol=1e-13,
+    )
     return sol.y.T
 
 
@@ -52,8 +58,11 @@ def test_a_cvode_failure_is_one_message(
 ) -> None:
     sim = Simulator(zero_nominals_fmu)
     try:
-        with pytest.raises(FmuError, match=r"model-exchange solver \(SUNDIALS CVode.*\) failed "
-                           r"between t = 0.0 s and 0.25 s: At t = .*corrector"):  # fmt: skip
+        with pytest.raises(
+            FmuError,
+            match=r"model-exchange solver \(SUNDIALS CVode.*\) failed "
+            r"between t = 0.0 s and 0.25 s: At t = .*corrector",
+        ):
             sim.simulate({"k": 2.0, "c": -1e4}, SPAN, {}, TIMES, ["x"])
     finally:
         sim.close()

@@ -9,6 +9,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.demo.compilation import ci_compilation_figure, ci_entries_from_profile
 from fmuid.discrepancy.residual_tests import Series, Window
 from fmuid.discrepancy.result import Diagnosis
 from fmuid.discrepancy.series import DiagnosisSeries
@@ -16,8 +17,6 @@ from fmuid.estimation.series import ResidualSeries
 from fmuid.experiment_design.discriminate import Discrimination
 from fmuid.experiment_design.signals import Trial
 from fmuid.plots import (
-    ci_compilation_figure,
-    ci_entries_from_profile,
     diagnosis_fit_figure,
     diagnosis_residual_figure,
     diagnosis_spectrum_figure,
@@ -41,10 +40,17 @@ def _gids(ax) -> list[str]:
 def _residual_series() -> list[ResidualSeries]:
     rng = np.random.default_rng(3)
     return [
-        ResidualSeries(exp, "x", T, np.sin(T) + 0.1 * rng.standard_normal(T.size), np.sin(T),
-                       rng.standard_normal(T.size), unit="m")
+        ResidualSeries(
+            exp,
+            "x",
+            T,
+            np.sin(T) + 0.1 * rng.standard_normal(T.size),
+            np.sin(T),
+            rng.standard_normal(T.size),
+            unit="m",
+        )
         for exp in ("step", "ramp")
-    ]  # fmt: skip
+    ]
 
 
 def _band() -> TrajectoryBand:
@@ -140,14 +146,31 @@ def diagnosis_inputs(msd_fmu: Path) -> tuple[Diagnosis, DiagnosisSeries]:
     ]
     series = DiagnosisSeries(problem, outputs, outputs, residuals, residuals)
     diagnosis = Diagnosis(
-        mismatch=True, false_alarm=0.01, evidence=(), tests_before=(), tests_after=(),
-        location={"frequency_hz": [1.0, 2.0], "time_windows": [[1.0, 2.0]], "outputs": ["v"],
-                  "experiments": [problem.experiments[1].name]},
-        windows=(Window(problem.experiments[0].name, "x", 0.0, 10.0, 3.0),), effect="output_lag",
-        description="", candidates=(), added_parameters={}, chi2_before=1.0, chi2_after=1.0,
-        n_data=164, lrt_p_value=None, bic_before=1.0, bic_after=1.0,
-        parameters_before={"k": 4.0}, parameters_after={"k": 4.0},
-    )  # fmt: skip
+        mismatch=True,
+        false_alarm=0.01,
+        evidence=(),
+        tests_before=(),
+        tests_after=(),
+        location={
+            "frequency_hz": [1.0, 2.0],
+            "time_windows": [[1.0, 2.0]],
+            "outputs": ["v"],
+            "experiments": [problem.experiments[1].name],
+        },
+        windows=(Window(problem.experiments[0].name, "x", 0.0, 10.0, 3.0),),
+        effect="output_lag",
+        description="",
+        candidates=(),
+        added_parameters={},
+        chi2_before=1.0,
+        chi2_after=1.0,
+        n_data=164,
+        lrt_p_value=None,
+        bic_before=1.0,
+        bic_after=1.0,
+        parameters_before={"k": 4.0},
+        parameters_after={"k": 4.0},
+    )
     return diagnosis, series
 
 

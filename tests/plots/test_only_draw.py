@@ -6,9 +6,16 @@ from pathlib import Path
 PLOTS = Path(__file__).resolve().parents[2] / "service" / "fmuid" / "plots"
 FORBIDDEN_MODULES = ("fmuid.model", "fmuid.stages", "fmuid.estimation.optimize")
 FORBIDDEN_NAMES = {
-    "Problem", "FmuPredictor", "make_problem", "residual_series", "trajectory_band",
-    "diagnosis_series", "augmented_problem_of", "fit_problem", "profile_problem",
-}  # fmt: skip
+    "Problem",
+    "FmuPredictor",
+    "make_problem",
+    "residual_series",
+    "trajectory_band",
+    "diagnosis_series",
+    "augmented_problem_of",
+    "fit_problem",
+    "profile_problem",
+}
 """What simulates or fits: the engine calls these and hands the plots their results."""
 SIMULATING_CALLS = {"predict", "residuals", "chi2", "simulate", "fit", "profile", "diagnose"}
 

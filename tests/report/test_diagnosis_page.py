@@ -13,24 +13,59 @@ class _Unexplained:
             "mismatch": True,
             "effect": "unexplained",
             "description": "A mismatch no catalogue entry explains.",
-            "evidence": [{"test": "residual_whiteness", "output": "x", "experiment": "a.csv",
-                          "p_value": 1e-8, "statistic": 80.0, "df": 20.0}],
-            "location": {"outputs": ["x"], "experiments": ["a.csv"], "time_windows": [[1, 2]],
-                         "frequency_hz": [0.5, 1.0], "chi2_gain": {"a.csv/x": 12.0}},
-            "candidates": [{"effect": "output_bias", "parameters": {"bias_x": 0.1}, "chi2": 90.0,
-                            "p_value": 0.2, "statistic": 1.0, "p_adjusted": 0.5, "stage": 1}],
-            "indistinguishable": [{"effect": "output_lag", "parameters": {"tau_outputs": 0.1},
-                                   "chi2": 91.0, "test": "equal_predictions", "p_value": 1.0,
-                                   "intervals": {"tau_outputs": {"estimate": 0.1}}}],
+            "evidence": [
+                {
+                    "test": "residual_whiteness",
+                    "output": "x",
+                    "experiment": "a.csv",
+                    "p_value": 1e-8,
+                    "statistic": 80.0,
+                    "df": 20.0,
+                }
+            ],
+            "location": {
+                "outputs": ["x"],
+                "experiments": ["a.csv"],
+                "time_windows": [[1, 2]],
+                "frequency_hz": [0.5, 1.0],
+                "chi2_gain": {"a.csv/x": 12.0},
+            },
+            "candidates": [
+                {
+                    "effect": "output_bias",
+                    "parameters": {"bias_x": 0.1},
+                    "chi2": 90.0,
+                    "p_value": 0.2,
+                    "statistic": 1.0,
+                    "p_adjusted": 0.5,
+                    "stage": 1,
+                }
+            ],
+            "indistinguishable": [
+                {
+                    "effect": "output_lag",
+                    "parameters": {"tau_outputs": 0.1},
+                    "chi2": 91.0,
+                    "test": "equal_predictions",
+                    "p_value": 1.0,
+                    "intervals": {"tau_outputs": {"estimate": 0.1}},
+                }
+            ],
             "added_parameters": {},
             "absorbed": {},
             "generic_correction": {
-                "model": "ARX(4, 6)", "chi2_before": 120.0, "chi2_after": 60.0,
-                "noise_chi2": 55.0, "structure_fraction": 0.92,
+                "model": "ARX(4, 6)",
+                "chi2_before": 120.0,
+                "chi2_after": 60.0,
+                "noise_chi2": 55.0,
+                "structure_fraction": 0.92,
                 "outputs": {"x": {"chi2_before": 120.0}},
-                "dynamics": {"mode": {"frequency_hz": 0.8, "damping": 0.1},
-                             "frequency_hz": [0.5, 1.0], "band_output": "x",
-                             "leads": None},
+                "dynamics": {
+                    "mode": {"frequency_hz": 0.8, "damping": 0.1},
+                    "frequency_hz": [0.5, 1.0],
+                    "band_output": "x",
+                    "leads": None,
+                },
             },
             "chi2_before": 120.0,
             "chi2_after": 120.0,
@@ -38,7 +73,7 @@ class _Unexplained:
             "units": {"k": "N/m", "x": "m"},
             "whiteness_before": {"a.csv/x": 1e-8},
             "whiteness_after": {"a.csv/x": 1e-8},
-        }  # fmt: skip
+        }
 
 
 def test_no_python_literal_reaches_the_page_and_units_show(tmp_path):
@@ -68,10 +103,15 @@ def _proposal():
     lag = {"x": np.tanh(time), "v": np.cosh(time) ** -2}
     delay = {"x": np.tanh(time - 0.1), "v": np.cosh(time - 0.1) ** -2}
     found = Discrimination(
-        trial, ("output_lag", "input_delay"),
+        trial,
+        ("output_lag", "input_delay"),
         {"input_delay fitted to output_lag": 41.5, "output_lag fitted to input_delay": 38.25},
-        time, {"output_lag": lag, "input_delay": delay}, "f", 24, {"x": 0.005, "v": 0.01},
-    )  # fmt: skip
+        time,
+        {"output_lag": lag, "input_delay": delay},
+        "f",
+        24,
+        {"x": 0.005, "v": 0.01},
+    )
     return found
 
 

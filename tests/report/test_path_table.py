@@ -15,8 +15,16 @@ def test_path_frame_holds_every_point_with_its_refit():
     result = toy_profile_result()
     frame = result.path_frame()
     assert list(frame.columns) == [
-        "parameter", "value", "chi2", "delta_chi2", "inside", "m", "k", "at_bound", "error",
-    ]  # fmt: skip
+        "parameter",
+        "value",
+        "chi2",
+        "delta_chi2",
+        "inside",
+        "m",
+        "k",
+        "at_bound",
+        "error",
+    ]
     assert len(frame) == sum(len(p.points) for p in result.parameters.values())
     sd = {"m": 0.1, "k": 0.2}
     for name, other in (("m", "k"), ("k", "m")):

@@ -2,12 +2,8 @@ import dataclasses
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from fmuid.plots import (
-    ci_compilation_figure,
-    ci_entries_from_profile,
-    parameter_paths_figure,
-    profile_figure,
-)
+from fmuid.demo.compilation import ci_compilation_figure, ci_entries_from_profile
+from fmuid.plots import parameter_paths_figure, profile_figure
 from plots.toy import toy_profile_result
 
 

@@ -26,29 +26,58 @@ from plots.toy import toy_fit, toy_profile_result
 CONTRACT_DIAGNOSIS = {
     "mismatch": True,
     "evidence": [
-        {"test": "residual_whiteness", "output": "gam_t", "experiment": "step.csv",
-         "p_value": 1e-6}
+        {"test": "residual_whiteness", "output": "gam_t", "experiment": "step.csv", "p_value": 1e-6}
     ],
-    "location": {"outputs": ["gam_t"], "experiments": ["step.csv"],
-                 "time_windows": [[1.0, 3.2]], "frequency_hz": [0.3, 1.0]},
+    "location": {
+        "outputs": ["gam_t"],
+        "experiments": ["step.csv"],
+        "time_windows": [[1.0, 3.2]],
+        "frequency_hz": [0.3, 1.0],
+    },
     "effect": "output_lag",
     "description": "The yaw-rate sensors lag the motion by about 0.12 s.",
-    "candidates": [{"effect": "output_lag", "parameters": {"tau_outputs": 0.12}, "chi2": 101.0,
-                    "p_value": 1e-12, "bic": 120.0}],
-    "added_parameters": {"tau_outputs": {"estimate": 0.12, "ci": [0.10, 0.14], "confidence": 0.95,
-                                         "unit": "s", "off": 0.0, "excludes_off": True}},
-    "chi2_before": 640.2, "chi2_after": 101.0,
+    "candidates": [
+        {
+            "effect": "output_lag",
+            "parameters": {"tau_outputs": 0.12},
+            "chi2": 101.0,
+            "p_value": 1e-12,
+            "bic": 120.0,
+        }
+    ],
+    "added_parameters": {
+        "tau_outputs": {
+            "estimate": 0.12,
+            "ci": [0.10, 0.14],
+            "confidence": 0.95,
+            "unit": "s",
+            "off": 0.0,
+            "excludes_off": True,
+        }
+    },
+    "chi2_before": 640.2,
+    "chi2_after": 101.0,
     "parameters": {"C_atf": {"before": 180000.0, "after": 221000.0}},
-}  # fmt: skip
+}
 
 #: Fields CONTRACT.md names for each kind: the published schema requires them.
 CONTRACT_FIELDS = {
     "fit": {"fmu", "n_data", "chi2", "sigma", "parameters", "cost"},
-    "profile": {"fmu", "n_data", "chi2", "confidence", "thresholds", "sigma", "parameters",
-                "better_optimum_found", "structural_check", "cost"},
+    "profile": {
+        "fmu",
+        "n_data",
+        "chi2",
+        "confidence",
+        "thresholds",
+        "sigma",
+        "parameters",
+        "better_optimum_found",
+        "structural_check",
+        "cost",
+    },
     "diagnose": {"mismatch", "chi2_before", "chi2_after"},
     "design": {"designs", "not_identifiable_by_any", "cost"},
-}  # fmt: skip
+}
 
 
 def small_design() -> DesignResult:

@@ -20,7 +20,6 @@ import contextlib
 import logging
 import os
 import shutil
-import signal
 import time
 from pathlib import Path
 
@@ -31,6 +30,7 @@ from fmuid.jobs.draw import forked_drawing
 from fmuid.jobs.housekeeping import remove_paths
 from fmuid.jobs.launcher import WarmServer
 from fmuid.jobs.layout import DataLayout
+from fmuid.processes import kill_group
 from fmuid.settings import Settings
 
 logger = logging.getLogger(__name__)
@@ -122,7 +122,7 @@ class ReportDrawer:
             process = self.warm.fork(forked_drawing, arguments, f"fmuid-report-{job_id}")
             process.process.join(DRAW_TIMEOUT_S)
             if not process.exited():
-                os.killpg(process.pid, signal.SIGKILL)
+                kill_group(process.pid)
                 self._fail(error, f"drawing took longer than {DRAW_TIMEOUT_S:g} s; stopped")
             elif (status := process.wait()) != 0 and not error.is_file():
                 self._fail(error, f"the drawing process ended with status {status}")

@@ -145,9 +145,14 @@ def _cmd_profile(args: argparse.Namespace) -> int:
     tests = _test_data(args)
     with ProgressDisplay() as progress:
         result = fmuid.profile(
-            fmu, experiments, spec, workers=args.workers, progress=progress, problem=problem,
+            fmu,
+            experiments,
+            spec,
+            workers=args.workers,
+            progress=progress,
+            problem=problem,
             test_data=tests,
-        )  # fmt: skip
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -163,9 +168,14 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     options = DiagnoseOptions(workers=args.workers or os.cpu_count() or 1)
     with ProgressDisplay() as progress:
         result = diagnose(
-            fmu, experiments, spec, options=options, progress=progress, problem=problem,
+            fmu,
+            experiments,
+            spec,
+            options=options,
+            progress=progress,
+            problem=problem,
             test_data=tests,
-        )  # fmt: skip
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
@@ -180,9 +190,13 @@ def _cmd_design(args: argparse.Namespace) -> int:
     fmu, spec, space = _fmu_path(args.fmu), load_spec(Path(args.spec)), load_space(args.space)
     with ProgressDisplay() as progress:
         result = design(
-            fmu, spec, space, workers=args.workers, progress=progress,
+            fmu,
+            spec,
+            space,
+            workers=args.workers,
+            progress=progress,
             checkpoint=Path(args.checkpoint) if args.checkpoint else None,
-        )  # fmt: skip
+        )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         from fmuid.report.design import write_design_report
@@ -253,13 +267,16 @@ def _parser() -> argparse.ArgumentParser:
             "(.json: its estimates, without the global search)",
         )
         p.add_argument(
-            "--test-data", action="append", default=[],
+            "--test-data",
+            action="append",
+            default=[],
             help="held-out CSV file (repeatable): the fitted model's simulation error on it",
-        )  # fmt: skip
+        )
         p.add_argument(
-            "--settle", type=_seconds,
+            "--settle",
+            type=_seconds,
             help="settle-in window [s] left out of the likelihood (default: the spec's settle)",
-        )  # fmt: skip
+        )
         interface_option(p)
         if name in ("profile", "diagnose"):
             p.add_argument("--workers", type=int, help="worker processes (default: CPU count)")

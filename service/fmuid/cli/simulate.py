@@ -59,9 +59,13 @@ def simulate_command(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     np.savetxt(
-        out, np.column_stack(list(columns.values())), delimiter=",", header=",".join(columns),
-        comments="", fmt="%.12g",
-    )  # fmt: skip
+        out,
+        np.column_stack(list(columns.values())),
+        delimiter=",",
+        header=",".join(columns),
+        comments="",
+        fmt="%.12g",
+    )
     print(out)  # noqa: T201
     return 0
 

@@ -12,17 +12,16 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from fmuid.demo.advice import StudyCase, advice_tables, study_verdict
+from fmuid.demo.compilation import ci_compilation_figure, ci_entries_from_profile
 from fmuid.estimation.series import residual_series
 from fmuid.plots import (
-    ci_compilation_figure,
-    ci_entries_from_profile,
     fit_figure,
     profile_figure,
     trajectory_band_figure,
 )
 from fmuid.profiling.band import trajectory_band
 from fmuid.readable import duration, interval, interval_end
-from fmuid.report.advice import StudyCase, advice_tables, study_verdict
 from fmuid.report.page import HtmlPage, file_slug, with_unit
 from fmuid.report.writer import write_report
 
@@ -159,7 +158,7 @@ def write_study_report(
             "n_data",
             "wall time",
             *(with_unit(n, units.get(n)) for n in names),
-        ],  # fmt: skip
+        ],
         [
             [
                 r.design.name,

@@ -142,20 +142,33 @@ def design(
     points = robust_points(spec, space, template, rng)
     base = Screen(model, spec, space, points, np.eye(len(spec.parameters)), set(), [], threshold)
     run = functools.partial(
-        evaluate_resumably, checkpoint=store, model=model, interface=spec.interface,
-        workers=workers, executor=executor,
-    )  # fmt: skip
+        evaluate_resumably,
+        checkpoint=store,
+        model=model,
+        interface=spec.interface,
+        workers=workers,
+        executor=executor,
+    )
     sens_all = run(
-        base.sensitivities, trials, [f"screen-{k}" for k in range(len(trials))], SENSITIVITIES,
+        base.sensitivities,
+        trials,
+        [f"screen-{k}" for k in range(len(trials))],
+        SENSITIVITIES,
         on_done=_reporter(progress, "Fisher screen"),
-    )  # fmt: skip
+    )
     sims0 = len(trials) * len(points) * (2 * len(spec.parameters))
     check = null_space([s[0] for s in sens_all], template, points[0])
     combos = check["non_identifiable_combinations"]
     screen = Screen(
-        model, spec, space, points, identifiable_basis(combos, template.names),
-        structural_names(combos), combos, threshold,
-    )  # fmt: skip
+        model,
+        spec,
+        space,
+        points,
+        identifiable_basis(combos, template.names),
+        structural_names(combos),
+        combos,
+        threshold,
+    )
     scored = [
         (screen.score(sens, trial, outputs), k, outputs)
         for k, (trial, sens) in enumerate(zip(trials, sens_all, strict=True))
@@ -173,9 +186,12 @@ def design(
         for i, draw in pairs
     ]
     draws = run(
-        DrawTask.run, tasks, [f"verify-{i}-{draw}" for i, draw in pairs], DRAW,
+        DrawTask.run,
+        tasks,
+        [f"verify-{i}-{draw}" for i, draw in pairs],
+        DRAW,
         on_done=_reporter(progress, "profiles of the best designs"),
-    )  # fmt: skip
+    )
     verified = []
     for i, d in enumerate(ranked[:n_verify]):
         v = combine(list(spec.parameters), draws[i * space.draws : (i + 1) * space.draws])
@@ -200,13 +216,20 @@ def design(
         stage_seconds={"screen_seconds": t_screen, "verify_seconds": seconds - t_screen},
     )
     options = {
-        "stage": "design", "space": space.model_dump(mode="json"), "verify_designs": n_verify,
-        "workers": workers, "executor": None if executor is None else type(executor).__name__,
-    }  # fmt: skip
+        "stage": "design",
+        "space": space.model_dump(mode="json"),
+        "verify_designs": n_verify,
+        "workers": workers,
+        "executor": None if executor is None else type(executor).__name__,
+    }
     return provenance.record(
-        result, fmu_sha256=model.sha256, spec=spec, options=options, started=started,
+        result,
+        fmu_sha256=model.sha256,
+        spec=spec,
+        options=options,
+        started=started,
         seed=space.seed,
-    )  # fmt: skip
+    )
 
 
 def _reporter(progress: ProgressCallback | None, detail: str) -> Callable[[int, int], None]:

@@ -115,11 +115,14 @@ def _run_dask(
     blob = model.path.read_bytes()
     futures = [
         client.submit(
-            evaluate_anywhere, PickledTask(model.file, pickle.dumps((evaluate, t))), blob,
-            unreliable, pure=False,
+            evaluate_anywhere,
+            PickledTask(model.file, pickle.dumps((evaluate, t))),
+            blob,
+            unreliable,
+            pure=False,
         )
         for t in tasks
-    ]  # fmt: skip
+    ]
     index = {f.key: k for k, f in enumerate(futures)}
     try:
         for future in dask_completed(futures):

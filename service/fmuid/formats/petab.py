@@ -145,7 +145,7 @@ def write_petab(
                 "experimentName": e.name,
             }
             for i, e in zip(ids, experiments, strict=True)
-        ],  # fmt: skip
+        ],
         ("experimentId", "time", "conditionId", "experimentName"),
     )
     _write_tsv(
@@ -186,11 +186,20 @@ def write_petab(
 
 
 _PARAMETER_COLUMNS = (
-    "parameterId", "parameterScale", "lowerBound", "upperBound", "nominalValue", "estimate",
-)  # fmt: skip
+    "parameterId",
+    "parameterScale",
+    "lowerBound",
+    "upperBound",
+    "nominalValue",
+    "estimate",
+)
 _OBSERVABLE_COLUMNS = (
-    "observableId", "observableFormula", "noiseFormula", "noisePlaceholders", "noiseDistribution",
-)  # fmt: skip
+    "observableId",
+    "observableFormula",
+    "noiseFormula",
+    "noisePlaceholders",
+    "noiseDistribution",
+)
 
 
 def observable_ids(outputs: Iterable[str], model_names: Iterable[str]) -> dict[str, str]:

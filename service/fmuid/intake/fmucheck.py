@@ -13,8 +13,6 @@ killed afterwards, so that nothing a binary forks outlives the check.
 
 from __future__ import annotations
 
-import os
-import signal
 import stat
 import subprocess
 import sys
@@ -27,6 +25,7 @@ from pathlib import Path, PurePosixPath
 from fmuid.data.limits import FmuLimits
 from fmuid.errors import FmuError
 from fmuid.model.fmu import FmuModel
+from fmuid.processes import kill_group
 
 MAX_MEMBERS = 10_000
 MAX_RATIO = 200
@@ -194,10 +193,7 @@ def probe_binary(model: FmuModel, name: str, limits: FmuLimits) -> None:
 
 def _kill_group(proc: subprocess.Popen[bytes]) -> None:
     """Kill the probe's process group (the probe and anything it forked) and reap the probe."""
-    try:
-        os.killpg(proc.pid, signal.SIGKILL)
-    except ProcessLookupError:
-        pass
+    kill_group(proc.pid)
     proc.wait()
 
 

@@ -12,14 +12,12 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import select
 import signal
 import subprocess
 import sys
 import threading
 from collections.abc import Callable
-from pathlib import Path
 from queue import LifoQueue
 from typing import Any, TypeVar
 
@@ -28,6 +26,7 @@ import anyio.to_thread
 
 from fmuid.intake.vet import COMMAND, READY, VetTask
 from fmuid.jobs.reaper import kill_tree
+from fmuid.processes import kill_session
 
 logger = logging.getLogger(__name__)
 
@@ -78,23 +77,6 @@ class _Checker:
         kill_tree(self.proc.pid)
         kill_session(self.proc.pid)
         self.proc.wait()
-
-
-def kill_session(sid: int) -> None:
-    """Send SIGKILL to every process whose session id is ``sid``."""
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-        except OSError:
-            continue
-        fields = stat[stat.rindex(")") + 2 :].split()
-        if int(fields[3]) == sid:
-            try:
-                os.kill(int(entry.name), signal.SIGKILL)
-            except ProcessLookupError:
-                pass
 
 
 class VettingPool:

@@ -22,21 +22,46 @@ import zipfile
 from pathlib import Path
 
 COMMON = {
-    "2.0": ("fmi2GetVersion", "fmi2Instantiate", "fmi2FreeInstance", "fmi2SetupExperiment",
-            "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Reset",
-            "fmi2SetReal", "fmi2GetReal"),
-    "3.0": ("fmi3GetVersion", "fmi3FreeInstance", "fmi3EnterInitializationMode",
-            "fmi3ExitInitializationMode", "fmi3Reset", "fmi3SetFloat64", "fmi3GetFloat64"),
-}  # fmt: skip
+    "2.0": (
+        "fmi2GetVersion",
+        "fmi2Instantiate",
+        "fmi2FreeInstance",
+        "fmi2SetupExperiment",
+        "fmi2EnterInitializationMode",
+        "fmi2ExitInitializationMode",
+        "fmi2Reset",
+        "fmi2SetReal",
+        "fmi2GetReal",
+    ),
+    "3.0": (
+        "fmi3GetVersion",
+        "fmi3FreeInstance",
+        "fmi3EnterInitializationMode",
+        "fmi3ExitInitializationMode",
+        "fmi3Reset",
+        "fmi3SetFloat64",
+        "fmi3GetFloat64",
+    ),
+}
 INTERFACE = {
     ("2.0", "CoSimulation"): ("fmi2DoStep",),
-    ("2.0", "ModelExchange"): ("fmi2SetTime", "fmi2SetContinuousStates", "fmi2GetDerivatives",
-                               "fmi2NewDiscreteStates", "fmi2EnterContinuousTimeMode"),
+    ("2.0", "ModelExchange"): (
+        "fmi2SetTime",
+        "fmi2SetContinuousStates",
+        "fmi2GetDerivatives",
+        "fmi2NewDiscreteStates",
+        "fmi2EnterContinuousTimeMode",
+    ),
     ("3.0", "CoSimulation"): ("fmi3InstantiateCoSimulation", "fmi3DoStep"),
-    ("3.0", "ModelExchange"): ("fmi3InstantiateModelExchange", "fmi3SetTime",
-                               "fmi3SetContinuousStates", "fmi3GetContinuousStateDerivatives",
-                               "fmi3UpdateDiscreteStates", "fmi3EnterContinuousTimeMode"),
-}  # fmt: skip
+    ("3.0", "ModelExchange"): (
+        "fmi3InstantiateModelExchange",
+        "fmi3SetTime",
+        "fmi3SetContinuousStates",
+        "fmi3GetContinuousStateDerivatives",
+        "fmi3UpdateDiscreteStates",
+        "fmi3EnterContinuousTimeMode",
+    ),
+}
 """FMI functions the binary must export, by FMI version and the interface fmuid drives."""
 BINARIES = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
 

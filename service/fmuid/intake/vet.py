@@ -18,7 +18,6 @@ import json
 import logging
 import os
 import re
-import resource
 import sys
 import threading
 import time
@@ -32,9 +31,10 @@ from fmuid.data.limits import over_limit
 from fmuid.errors import FmuidError, SpecError
 from fmuid.estimation.check import check_study
 from fmuid.intake.fmucheck import FmuLimits, check_fmu
-from fmuid.jobs.reaper import become_subreaper, kill_tree, reap_children
+from fmuid.jobs.reaper import kill_tree, reap_children
 from fmuid.jobs.records import TEST_DATA
 from fmuid.model.fmu import FmuModel
+from fmuid.processes import allow_cpu_seconds, become_subreaper, limit_memory, memory_limit_mb
 
 logger = logging.getLogger(__name__)
 
@@ -174,13 +174,11 @@ def _check_design(path: Path, spec: Spec, model: FmuModel, limits: InputLimits) 
 
 def _answer(task: VetTask) -> dict[str, Any]:
     """Run :func:`vet` within the task's CPU time; turn the unexpected into an answer."""
-    used = sum(resource.getrusage(resource.RUSAGE_SELF)[:2])
-    soft = int(used + task.cpu_seconds) + 1
-    resource.setrlimit(resource.RLIMIT_CPU, (soft, resource.RLIM_INFINITY))
+    allow_cpu_seconds(task.cpu_seconds)
     try:
         return vet(task)
     except MemoryError:
-        limit = resource.getrlimit(resource.RLIMIT_AS)[0] // (1024 * 1024)
+        limit = memory_limit_mb()
         detail = f"checking the upload needs more than {limit} MB (FMUID_CHECK_MEMORY_MB)"
         return {"ok": False, "status": 422, "detail": detail, "recycle": True}
     except Exception as exc:  # a bug here must not end the process silently
@@ -203,9 +201,7 @@ def _watch_parent(parent: int) -> None:
 
 def main(argv: list[str]) -> int:
     """Answer tasks from stdin until it closes (or the parent dies, or memory piles up)."""
-    memory = int(argv[1]) * 1024 * 1024
-    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
-    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    limit_memory(int(argv[1]))
     answers = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever else writes to stdout (native code) goes to the log
     if not become_subreaper():

@@ -26,6 +26,7 @@ from typing import Any
 from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.proc import JOB_NICENESS
 from fmuid.jobs.store import JobStore
+from fmuid.processes import limit_memory
 from fmuid.profiling.pool_guard import die_with_pool_owner
 
 logger = logging.getLogger(__name__)
@@ -62,14 +63,13 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
     Every failure, reading the job back included, ends in ``reports/<id>.error``.
     """
     from fmuid.intake.inputs import load_job_inputs
-    from fmuid.jobs.run import limit_process
     from fmuid.results import result_from_dict
 
     layout = DataLayout(data_dir)
     tmp, error_file = layout.report_marker(job_id), layout.report_error(job_id)
     logger.info("drawing the report of job %s", job_id)
     try:
-        limit_process(memory_mb)
+        limit_memory(memory_mb)
         store = JobStore(db_path, data_dir)
         job = store.get(job_id)
         text = store.result(job_id)

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from fmuid.jobs.proc import JOB_DB_ENV, JOB_NICENESS, is_alive, job_command, job_environment
+from fmuid.jobs.proc import JOB_DB_ENV, JOB_NICENESS, job_command, job_environment
+from fmuid.processes import is_alive
 from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 
 logger = logging.getLogger(__name__)

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 from fmuid.jobs.reaper import kill_tree
+from fmuid.processes import is_alive, kill_group
 
 JOB_NICENESS = 5
 """Job and report drawing processes run at this lower priority, so that on a machine whose cores
@@ -59,14 +60,6 @@ def job_environment(db_path: Path, job_id: str) -> dict[str, str]:
         PYTHONFAULTHANDLER="1",
         **{JOB_DB_ENV: str(db_path), JOB_ID_ENV: job_id, PARENT_ENV: str(os.getpid())},
     )
-
-
-def kill_group(pgid: int) -> None:
-    """Send SIGKILL to the process group ``pgid`` (a job process and its children), if any."""
-    try:
-        os.killpg(pgid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        pass
 
 
 def end_job(pid: int) -> None:
@@ -127,12 +120,3 @@ def end_processes(pids: list[int], timeout: float = 10.0) -> list[int]:
             break
         time.sleep(0.05)
     return left
-
-
-def is_alive(pid: int) -> bool:
-    """Whether process ``pid`` exists and is not a zombie."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat.rsplit(")", 1)[1].split()[0] != "Z"

@@ -9,35 +9,26 @@ it detached, is in their tree of ``/proc/<pid>/stat`` parents. :func:`kill_tree`
 tree (``SIGSTOP``, so nothing forks meanwhile), then kills it. A leader ends its tree when its
 job ends and when the service dies (:func:`end_tree_on_parent_death`).
 
-Where the call is refused (not Linux, or a kernel without it) :func:`become_subreaper` returns
-``False`` and orphans go to init: the group kill and the restart's search by tag still end every
-process that kept its group or its environment, but not one that dropped both.
+Where the call is refused (not Linux, or a kernel without it),
+:func:`fmuid.processes.become_subreaper` returns ``False`` and orphans go to init: the group kill
+and the restart's search by tag still end every process that kept its group or its environment,
+but not one that dropped both.
 """
 
 from __future__ import annotations
 
-import ctypes
 import logging
 import os
 import signal
 import threading
 from pathlib import Path
 
+from fmuid.processes import die_with_parent
+
 logger = logging.getLogger(__name__)
 
-PR_SET_PDEATHSIG = 1
-PR_SET_CHILD_SUBREAPER = 36
 FREEZE_ROUNDS = 50
 """Looks at the tree while freezing it: a tree that still grows after that many is killed as is."""
-
-
-def become_subreaper() -> bool:
-    """Make orphaned descendants of this process its children; whether the kernel agreed."""
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        return int(libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0)) == 0
-    except (OSError, AttributeError):
-        return False
 
 
 def _parents() -> dict[int, int]:
@@ -133,6 +124,6 @@ def end_tree_on_parent_death() -> None:
         os._exit(128 + signal.SIGTERM)
 
     threading.Thread(target=watch, name="fmuid-end-tree", daemon=True).start()
-    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    die_with_parent(signal.SIGTERM)
     if os.getppid() != parent:  # the parent died before the request took effect
         os.kill(os.getpid(), signal.SIGTERM)

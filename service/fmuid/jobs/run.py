@@ -19,7 +19,6 @@ import logging
 import math
 import os
 import re
-import resource
 import shutil
 import signal
 import sys
@@ -38,8 +37,9 @@ from fmuid.errors import FmuidError
 from fmuid.intake.inputs import load_job_inputs
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.health import free_space_problem
-from fmuid.jobs.reaper import become_subreaper, end_tree_on_parent_death, kill_tree
+from fmuid.jobs.reaper import end_tree_on_parent_death, kill_tree
 from fmuid.jobs.store import Job, JobStore, StoreError
+from fmuid.processes import become_subreaper, kill_group, limit_memory
 from fmuid.progress import Progress
 
 logger = logging.getLogger(__name__)
@@ -48,17 +48,6 @@ PROGRESS_INTERVAL_S = 0.5
 ALARM_GRACE_S = 10
 """The kernel's ``SIGALRM`` ends the job this long after its time limit if nothing else did."""
 _FMI_VERSION = re.compile(rb'fmiVersion\s*=\s*"([^"]{1,10})"')
-
-
-def limit_process(memory_mb: int) -> None:
-    """Cap this process's address space and core dumps.
-
-    ``RLIMIT_AS`` makes allocations past the limit fail (``MemoryError`` in Python, ``NULL``
-    from ``malloc`` in the FMU) instead of exhausting the machine.
-    """
-    limit = memory_mb * 1024 * 1024
-    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
 
 def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
@@ -74,7 +63,7 @@ def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
             store.fail(job_id, f"exceeded the time limit of {timeout_s:g} s")
         finally:
             kill_tree(os.getpid(), include_root=False)
-            os.killpg(os.getpgrp(), signal.SIGKILL)
+            kill_group(os.getpgrp())
 
     watchdog = threading.Timer(timeout_s, expire)
     watchdog.daemon = True
@@ -155,9 +144,13 @@ def run_engine(
                     ) from exc
             if kind == "design":
                 return fmuid.design(
-                    fmu, spec, experiments[0], progress=progress, executor=executor,
+                    fmu,
+                    spec,
+                    experiments[0],
+                    progress=progress,
+                    executor=executor,
                     checkpoint=checkpoint,
-                )  # fmt: skip
+                )
             return fmuid.profile(
                 fmu, experiments, spec, progress=progress, executor=executor, test_data=tests
             )
@@ -183,9 +176,15 @@ def run_job(
         try:
             inputs = load_job_inputs(store, job, Path(tmp), on_staged=_log_fmi_version)
             result = run_engine(
-                job.kind, inputs.fmu, inputs.experiments, inputs.spec, progress, dask,
-                checkpoint, inputs.test_data,
-            )  # fmt: skip
+                job.kind,
+                inputs.fmu,
+                inputs.experiments,
+                inputs.spec,
+                progress,
+                dask,
+                checkpoint,
+                inputs.test_data,
+            )
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:
             store.fail(job.id, str(exc))
@@ -264,7 +263,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--dask-scheduler", default=None)
     parser.add_argument("--min-free-bytes", type=int, default=0)
     args = parser.parse_args(argv)
-    limit_process(args.memory_mb)
+    limit_memory(args.memory_mb)
     become_subreaper()  # whatever the job starts stays below it (fmuid.jobs.reaper)
     end_tree_on_parent_death()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")

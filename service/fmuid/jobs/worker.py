@@ -35,8 +35,9 @@ from fmuid.jobs.crash import exit_message
 from fmuid.jobs.launcher import ColdProcess, JobProcess, Launch, WarmProcess, WarmServer
 from fmuid.jobs.layout import fit_own_tmp
 from fmuid.jobs.owner import OwnerLock, StoreInUse
-from fmuid.jobs.proc import end_job, end_processes, find_job_processes, kill_group
+from fmuid.jobs.proc import end_job, end_processes, find_job_processes
 from fmuid.jobs.store import Job, JobStore, StoreError
+from fmuid.processes import kill_group
 from fmuid.settings import Settings
 
 logger = logging.getLogger(__name__)

@@ -99,9 +99,13 @@ def load_table(model_dir: Path) -> ModelTable:
     digest = hashlib.sha256(text.encode()).hexdigest()
     guid = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, f"fmuid:{model_dir.name}:{digest}")) + "}"
     return ModelTable(
-        model_dir.name, raw["description"], guid, tuple(raw["states"]), tuple(entries),
+        model_dir.name,
+        raw["description"],
+        guid,
+        tuple(raw["states"]),
+        tuple(entries),
         raw.get("fmuid", {}),
-    )  # fmt: skip
+    )
 
 
 def render_header(table: ModelTable) -> str:
@@ -243,12 +247,21 @@ def _render_annotations(parent: ET.Element, block: dict[str, Any]) -> None:
 def _compile(src_dir: Path, model_dir: Path, include_dir: Path, library: Path) -> None:
     fmi_headers = Path(os.path.dirname(fmpy.__file__)) / "c-code"
     command = [
-        "gcc", "-shared", "-fPIC", "-O2", "-Wall", "-Wextra",
-        f"-I{fmi_headers}", f"-I{include_dir}", f"-I{src_dir}",
-        "-o", str(library),
-        str(src_dir / "fmi2_cs.c"), str(model_dir / "model.c"),
+        "gcc",
+        "-shared",
+        "-fPIC",
+        "-O2",
+        "-Wall",
+        "-Wextra",
+        f"-I{fmi_headers}",
+        f"-I{include_dir}",
+        f"-I{src_dir}",
+        "-o",
+        str(library),
+        str(src_dir / "fmi2_cs.c"),
+        str(model_dir / "model.c"),
         "-lm",
-    ]  # fmt: skip
+    ]
     logger.debug("compiling %s: %s", model_dir.name, " ".join(command))
     try:
         result = subprocess.run(command, capture_output=True, text=True, check=False)

@@ -13,19 +13,27 @@ from fmuid.model.fmu import Variable
 
 _C_INT = ctypes.c_int
 _FMI2_TYPES: dict[str, tuple[str, Any]] = {
-    "Real": ("Real", ctypes.c_double), "Integer": ("Integer", _C_INT),
-    "Enumeration": ("Integer", _C_INT), "Boolean": ("Boolean", _C_INT),
+    "Real": ("Real", ctypes.c_double),
+    "Integer": ("Integer", _C_INT),
+    "Enumeration": ("Integer", _C_INT),
+    "Boolean": ("Boolean", _C_INT),
     "String": ("String", ctypes.c_char_p),
-}  # fmt: skip
+}
 _FMI3_TYPES: dict[str, tuple[str, Any]] = {
-    "Float64": ("Float64", ctypes.c_double), "Float32": ("Float32", ctypes.c_float),
-    "Int8": ("Int8", ctypes.c_int8), "UInt8": ("UInt8", ctypes.c_uint8),
-    "Int16": ("Int16", ctypes.c_int16), "UInt16": ("UInt16", ctypes.c_uint16),
-    "Int32": ("Int32", ctypes.c_int32), "UInt32": ("UInt32", ctypes.c_uint32),
-    "Int64": ("Int64", ctypes.c_int64), "UInt64": ("UInt64", ctypes.c_uint64),
-    "Enumeration": ("Int64", ctypes.c_int64), "Boolean": ("Boolean", ctypes.c_bool),
+    "Float64": ("Float64", ctypes.c_double),
+    "Float32": ("Float32", ctypes.c_float),
+    "Int8": ("Int8", ctypes.c_int8),
+    "UInt8": ("UInt8", ctypes.c_uint8),
+    "Int16": ("Int16", ctypes.c_int16),
+    "UInt16": ("UInt16", ctypes.c_uint16),
+    "Int32": ("Int32", ctypes.c_int32),
+    "UInt32": ("UInt32", ctypes.c_uint32),
+    "Int64": ("Int64", ctypes.c_int64),
+    "UInt64": ("UInt64", ctypes.c_uint64),
+    "Enumeration": ("Int64", ctypes.c_int64),
+    "Boolean": ("Boolean", ctypes.c_bool),
     "String": ("String", ctypes.c_char_p),
-}  # fmt: skip
+}
 
 
 class Channels:

@@ -54,9 +54,14 @@ class _Model:
         self.plan = plan
         self.index = inputs.continuous
         self.inputs = inputs.subset(self.index)
-        names = ("SetTime", "GetContinuousStates", "SetContinuousStates", "GetEventIndicators",
-                 "GetNominalsOfContinuousStates",
-                 "GetContinuousStateDerivatives" if instance.v3 else "GetDerivatives")  # fmt: skip
+        names = (
+            "SetTime",
+            "GetContinuousStates",
+            "SetContinuousStates",
+            "GetEventIndicators",
+            "GetNominalsOfContinuousStates",
+            "GetContinuousStateDerivatives" if instance.v3 else "GetDerivatives",
+        )
         self.fn = {name: instance.f[instance.prefix + name] for name in names}
         self.c = instance.component
 
@@ -108,8 +113,12 @@ class _Model:
             logger.warning(
                 "%s: the FMU gives invalid nominals %s for %d of its %d continuous states "
                 "(they must be positive); fmuid uses max(|x|, 1) instead, for CVode's absolute "
-                "tolerances", self.instance.model.model_name, given, int(bad.sum()), n,
-            )  # fmt: skip
+                "tolerances",
+                self.instance.model.model_name,
+                given,
+                int(bad.sum()),
+                n,
+            )
 
     def apply(self, t: float) -> None:
         """Do nothing: inputs are set in :meth:`set_time` (fmpy's solver calls this)."""
@@ -214,8 +223,13 @@ def _integrate(
         if completed:
             flag = ctypes.c_bool if instance.v3 else ctypes.c_int
             enter, terminate = flag(), flag()
-            instance.call("CompletedIntegratorStep", 1, ctypes.byref(enter),
-                          ctypes.byref(terminate), when=f"at t = {t_reached} s")  # fmt: skip
+            instance.call(
+                "CompletedIntegratorStep",
+                1,
+                ctypes.byref(enter),
+                ctypes.byref(terminate),
+                when=f"at t = {t_reached} s",
+            )
             if terminate.value:
                 raise _Stop(t_reached)
             step_event = bool(enter.value)
@@ -231,12 +245,20 @@ def _solver(instance: Instance, model: _Model, description: Any, times: list[flo
     """Create the CVode solver at the first grid time, with SUNDIALS' stderr line silenced."""
     try:
         solver = CVodeSolver(
-            nx=description.numberOfContinuousStates, nz=description.numberOfEventIndicators,
-            get_x=model.get_x, set_x=model.set_x, get_dx=model.get_dx, get_z=model.get_z,
-            get_nominals=model.get_nominals, set_time=model.set_time, input=model,
-            startTime=times[0], maxStep=max(times[-1] - times[0], 1e-9) / 50,
-            relativeTolerance=RTOL, maxNumSteps=MAX_STEPS,
-        )  # fmt: skip
+            nx=description.numberOfContinuousStates,
+            nz=description.numberOfEventIndicators,
+            get_x=model.get_x,
+            set_x=model.set_x,
+            get_dx=model.get_dx,
+            get_z=model.get_z,
+            get_nominals=model.get_nominals,
+            set_time=model.set_time,
+            input=model,
+            startTime=times[0],
+            maxStep=max(times[-1] - times[0], 1e-9) / 50,
+            relativeTolerance=RTOL,
+            maxNumSteps=MAX_STEPS,
+        )
     except Exception as exc:  # fmpy raises a bare Exception when a CVode set-up call fails
         _raise(model)
         raise FmuError(

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import io
 import logging
 import posixpath
 import xml.etree.ElementTree as ET
@@ -20,6 +21,7 @@ import fmpy
 from fmpy.model_description import ModelDescription
 
 from fmuid.errors import FmuError
+from fmuid.model.annotations import fmuid_annotation_of
 from fmuid.model.variable import USABLE, Variable, from_fmpy
 
 logger = logging.getLogger(__name__)
@@ -53,33 +55,59 @@ _FIXED_HELP = {
 }
 
 
-def _check_archive(path: Path) -> set[str]:
+@dataclass(frozen=True)
+class _Archive:
+    """What one read of an FMU file gives: its bytes, entry names and parsed description."""
+
+    data: bytes
+    names: frozenset[str]
+    root: ET.Element | None
+    """The root of ``modelDescription.xml``, or None when the archive has none."""
+
+
+def _read_archive(path: Path) -> _Archive:
+    """Read the file once: its bytes, its entries (checked) and ``modelDescription.xml`` parsed.
+
+    The file is read from disk once and its zip directory opened once, in memory.
+    """
     if not path.is_file():
         raise FmuError(f"FMU {path} does not exist")
-    if not zipfile.is_zipfile(path):
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise FmuError(f"FMU {path} cannot be read: {exc}") from exc
+    if not zipfile.is_zipfile(io.BytesIO(data)):
         raise FmuError(f"{path} is not an FMU: it is not a zip archive")
     try:
-        with zipfile.ZipFile(path) as archive:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
             names = archive.namelist()
+            _check_names(path, names)
+            has_xml = "modelDescription.xml" in names
+            xml = archive.read("modelDescription.xml") if has_xml else None
     except (zipfile.BadZipFile, OSError) as exc:
         raise FmuError(f"{path} is not a readable zip archive: {exc}") from exc
+    root = None
+    if xml is not None:
+        try:
+            root = ET.fromstring(xml)
+        except ET.ParseError as exc:
+            raise FmuError(f"{path}: modelDescription.xml is not valid XML: {exc}") from exc
+    return _Archive(data, frozenset(names), root)
+
+
+def _check_names(path: Path, names: list[str]) -> None:
+    """Refuse entries that would escape the extraction directory."""
     for name in names:
         normalized = posixpath.normpath(name.replace("\\", "/"))
         if name.startswith(("/", "\\")) or normalized == ".." or normalized.startswith("../"):
             raise FmuError(f"{path}: archive entry {name!r} escapes the extraction directory")
         if len(name) > 1 and name[1] == ":":
             raise FmuError(f"{path}: archive entry {name!r} is an absolute Windows path")
-    return set(names)
 
 
-def _fmi_version(path: Path, names: set[str]) -> str:
-    if "modelDescription.xml" not in names:
+def _fmi_version(path: Path, root: ET.Element | None) -> str:
+    if root is None:
         raise FmuError(f"{path}: the FMU has no modelDescription.xml")
-    try:
-        with zipfile.ZipFile(path) as archive:
-            root = ET.fromstring(archive.read("modelDescription.xml"))
-    except ET.ParseError as exc:
-        raise FmuError(f"{path}: modelDescription.xml is not valid XML: {exc}") from exc
     version = root.get("fmiVersion", "unknown")
     return "3.0" if version.startswith("3.") else version
 
@@ -172,8 +200,8 @@ class FmuModel:
         self, path: str | Path, interface: str | None = None, *, sha256: str | None = None
     ) -> None:
         self.path = Path(path)
-        names = _check_archive(self.path)
-        self.sha256 = hashlib.sha256(self.path.read_bytes()).hexdigest()
+        archive = _read_archive(self.path)
+        self.sha256 = hashlib.sha256(archive.data).hexdigest()
         FmuModel.parses += 1
         if sha256 is not None and sha256 != self.sha256:
             raise FmuError(
@@ -181,29 +209,33 @@ class FmuModel:
                 f"expected {sha256[:12]}..."
             )
         logger.debug("parsed %s (sha256 %s)", self.path, self.sha256[:12])
-        version = _fmi_version(self.path, names)
+        version = _fmi_version(self.path, archive.root)
         if version not in BINARY_DIR:
             raise FmuError(
                 f"{self.path}: FMI version {version} is not supported (only 2.0 and 3.0)"
             )
-        try:
-            description = fmpy.read_model_description(str(self.path))
+        try:  # fmpy reads the bytes in memory: the file is not opened again
+            description = fmpy.read_model_description(io.BytesIO(archive.data))
         except Exception as exc:  # fmpy raises bare Exception, lxml and KeyError subclasses
             raise FmuError(
                 f"{self.path}: cannot read modelDescription.xml (FMI {version}): {exc}"
             ) from exc
+        self.annotation: ET.Element | None = fmuid_annotation_of(archive.root)
+        """The ``<Model>`` element of the FMU's ``fmuid`` vendor annotation, or None."""
         self.model_description: ModelDescription = description
         self.interfaces = tuple(
             name
-            for name, part in ((CO_SIMULATION, description.coSimulation),
-                               (MODEL_EXCHANGE, description.modelExchange))
+            for name, part in (
+                (CO_SIMULATION, description.coSimulation),
+                (MODEL_EXCHANGE, description.modelExchange),
+            )
             if part is not None
-        )  # fmt: skip
+        )
         self.interface = _choose_interface(self.path, self.interfaces, interface)
         self.model_name: str = description.modelName
         self.fmi_version: str = version
         self.guid: str = description.guid or description.instantiationToken or ""
-        self._archive = frozenset(names)
+        self._archive = archive.names
         self.model_identifier: str = self._identifier()
         self.parameters: dict[str, Variable] = {}
         self.inputs: dict[str, Variable] = {}
@@ -308,9 +340,11 @@ class FmuModel:
 
         """
         problems = []
-        roles = (("parameters", free, self.parameters, ("float",)),
-                 ("inputs", inputs, self.inputs, USABLE["input"]),
-                 ("outputs", outputs, self.outputs, USABLE["output"]))  # fmt: skip
+        roles = (
+            ("parameters", free, self.parameters, ("float",)),
+            ("inputs", inputs, self.inputs, USABLE["input"]),
+            ("outputs", outputs, self.outputs, USABLE["output"]),
+        )
         for field, names, table, kinds in roles:
             for name in names:
                 v = table.get(name)

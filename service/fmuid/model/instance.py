@@ -57,15 +57,21 @@ class Instance:
         self.messages: list[str] = []
         self.said: set[str] = set()
         """Topics of warnings already logged for this instance (each is said once)."""
-        classes = {(False, True): FMU2Slave, (False, False): FMU2Model,
-                   (True, True): FMU3Slave, (True, False): FMU3Model}  # fmt: skip
+        classes = {
+            (False, True): FMU2Slave,
+            (False, False): FMU2Model,
+            (True, True): FMU3Slave,
+            (True, False): FMU3Model,
+        }
         cls = classes[(self.v3, model.is_cosimulation)]
         cwd = os.getcwd()
         try:
             self.fmu: Any = cls(
-                guid=model.guid, unzipDirectory=unzip_dir,
-                modelIdentifier=model.model_identifier, instanceName=model.model_name,
-            )  # fmt: skip
+                guid=model.guid,
+                unzipDirectory=unzip_dir,
+                modelIdentifier=model.model_identifier,
+                instanceName=model.model_name,
+            )
         except Exception as exc:  # fmpy raises bare Exception when the library does not load
             raise FmuError(
                 f"FMU {model.path}: its binary for linux x86-64 does not load as "
@@ -189,9 +195,12 @@ class Instance:
         return channels.values
 
     def _transfer(
-        self, function: str, group: tuple[str, list[int], Any, Any], t: float | None,
+        self,
+        function: str,
+        group: tuple[str, list[int], Any, Any],
+        t: float | None,
         read: bool = False,
-    ) -> None:  # fmt: skip
+    ) -> None:
         if (status := self._status(function, group)) > 1:
             if read:
                 when = f"at t = {t} s"
@@ -351,8 +360,12 @@ class Instance:
             if self.v3:
                 flags = [ctypes.c_bool() for _ in range(5)]
                 next_time = ctypes.c_double()
-                self.call("UpdateDiscreteStates", *map(ctypes.byref, flags),
-                          ctypes.byref(next_time), when=when)  # fmt: skip
+                self.call(
+                    "UpdateDiscreteStates",
+                    *map(ctypes.byref, flags),
+                    ctypes.byref(next_time),
+                    when=when,
+                )
                 again, terminate, defined = flags[0].value, flags[1].value, flags[4].value
                 t_next = next_time.value
             else:

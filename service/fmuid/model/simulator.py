@@ -96,8 +96,11 @@ class Simulator(SimulatorBase):
         return "one instance, reset between runs"
 
     def _variables(self, names: Sequence[str], role: str) -> list[Variable]:
-        table = {"parameter": self.model.parameters, "input": self.model.inputs,
-                 "output": self.model.outputs}[role]  # fmt: skip
+        table = {
+            "parameter": self.model.parameters,
+            "input": self.model.inputs,
+            "output": self.model.outputs,
+        }[role]
         found = []
         for name in names:
             variable = table.get(name)
@@ -279,9 +282,14 @@ class Simulator(SimulatorBase):
         return plan, grid
 
     def _check_reset(
-        self, first: np.ndarray, values: list[float | str], plan: RunPlan,
-        par: Channels, inputs: Channels, out: Channels,
-    ) -> None:  # fmt: skip
+        self,
+        first: np.ndarray,
+        values: list[float | str],
+        plan: RunPlan,
+        par: Channels,
+        inputs: Channels,
+        out: Channels,
+    ) -> None:
         """Run again after a reset; an error or a different result marks the reset unreliable."""
         try:
             again, _ = self._run(values, plan, par, inputs, out)
@@ -291,8 +299,10 @@ class Simulator(SimulatorBase):
         if not self.reset_reliable:
             logger.warning(
                 "%s: a run after fmi%sReset differs from a fresh instance's; every run now "
-                "gets a fresh instance", self.model.model_name, self.model.fmi_version[0],
-            )  # fmt: skip
+                "gets a fresh instance",
+                self.model.model_name,
+                self.model.fmi_version[0],
+            )
 
     def _start(self) -> Instance:
         """Return an instance in the instantiated state: fresh, reset, or re-created.
@@ -317,9 +327,13 @@ class Simulator(SimulatorBase):
         return instance
 
     def _run(
-        self, values: list[float | str], plan: RunPlan,
-        par: Channels, inputs: Channels, out: Channels,
-    ) -> tuple[np.ndarray, float | None]:  # fmt: skip
+        self,
+        values: list[float | str],
+        plan: RunPlan,
+        par: Channels,
+        inputs: Channels,
+        out: Channels,
+    ) -> tuple[np.ndarray, float | None]:
         instance = self._start()
         t0 = plan.times[0]
         cosim = self.model.is_cosimulation

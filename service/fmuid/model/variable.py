@@ -8,9 +8,19 @@ import fmpy
 
 FLOAT_TYPES = frozenset({"Real", "Float64", "Float32"})
 INTEGER_TYPES = frozenset(
-    {"Integer", "Enumeration", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64",
-     "UInt64"}
-)  # fmt: skip
+    {
+        "Integer",
+        "Enumeration",
+        "Int8",
+        "UInt8",
+        "Int16",
+        "UInt16",
+        "Int32",
+        "UInt32",
+        "Int64",
+        "UInt64",
+    }
+)
 USABLE = {
     "parameter": ("float", "integer", "boolean", "string"),
     "input": ("float", "integer", "boolean"),

@@ -12,12 +12,12 @@ docstring says how many panels and in which order; a wrong count is a ``ValueErr
 number needed. A figure of its own gets a title; given axes keep the caller's figure title.
 
 The figures follow the thesis: profile likelihoods (Figs 2.8, 3.3), parameter paths along a
-profile (Fig 2.9), confidence-interval compilations (Figs 3.4, 3.9, 3.10), trajectory bands
-(Figs 2.12, 3.5) and fit overlays with residual diagnostics (Figs 3.11, 3.12). Figures are
+profile (Fig 2.9), trajectory bands (Figs 2.12, 3.5) and fit overlays with residual diagnostics
+(Figs 3.11, 3.12); the thesis study's confidence-interval compilations (Figs 3.4, 3.9, 3.10)
+are drawn by :mod:`fmuid.demo.compilation`. Figures are
 built on ``matplotlib.figure.Figure`` directly (Agg canvas, no pyplot state) and never shown.
 """
 
-from fmuid.plots.compilation import CiEntry, ci_compilation_figure, ci_entries_from_profile
 from fmuid.plots.design import discrimination_figure, widths_figure
 from fmuid.plots.diagnosis import (
     diagnosis_figures,
@@ -30,9 +30,6 @@ from fmuid.plots.profile import parameter_paths_figure, profile_figure
 from fmuid.plots.trajectory import trajectory_band_figure
 
 __all__ = [
-    "CiEntry",
-    "ci_compilation_figure",
-    "ci_entries_from_profile",
     "diagnosis_figures",
     "diagnosis_fit_figure",
     "diagnosis_residual_figure",

@@ -102,8 +102,15 @@ def discrimination_figure(result: Discrimination, *, ax: AxesArg = None) -> Figu
             (line,) = a.plot(result.time, pred[o], label=name, gid=f"prediction_{name}")
             if k == 0 and o in result.sigma:
                 band = (pred[o] - result.sigma[o], pred[o] + result.sigma[o])
-                a.fill_between(result.time, *band, color=line.get_color(), alpha=0.2, lw=0,
-                               label=f"{name} \u00b1 noise sigma", gid="noise_band")  # fmt: skip
+                a.fill_between(
+                    result.time,
+                    *band,
+                    color=line.get_color(),
+                    alpha=0.2,
+                    lw=0,
+                    label=f"{name} \u00b1 noise sigma",
+                    gid="noise_band",
+                )
         a.set_ylabel(o)
         a.legend(fontsize="small")
     axes[-1].set_xlabel("time [s]")

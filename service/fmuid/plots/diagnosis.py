@@ -89,8 +89,7 @@ def diagnosis_fit_figure(
                     exp.time, series.after[i][output], "-", color="tab:blue", label="augmented"
                 )
             else:
-                panel.plot(exp.time, series.before[i][output], "-", color="tab:red",
-                           label="model")  # fmt: skip
+                panel.plot(exp.time, series.before[i][output], "-", color="tab:red", label="model")
             panel.set_title(f"{exp.name}: {output}", fontsize=9)
             panel.set_xlabel("time [s]")
             panel.set_ylabel(unit_label(output, units.get(output, "")))

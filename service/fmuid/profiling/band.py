@@ -154,7 +154,7 @@ def trajectory_band(problem: Problem, result: ProfileResult, *, n: int = 30) -> 
             )
     outputs_of_fmu = problem.model.outputs
     positions = [
-        p for p in planar_paths(problem.fmu_path) if p.x in outputs_of_fmu and p.y in outputs_of_fmu
+        p for p in planar_paths(problem.model) if p.x in outputs_of_fmu and p.y in outputs_of_fmu
     ]
     units = (
         (outputs_of_fmu[positions[0].x].unit or "", outputs_of_fmu[positions[0].y].unit or "")

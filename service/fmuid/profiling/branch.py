@@ -106,9 +106,16 @@ def settle_branch(
     span = float(problem.z_upper[index] - problem.z_lower[index])
     estimate = WalkPoint(z_hat.copy(), chi2_hat)
     points, better = walk(
-        problem, [estimate], chi2_hat, index, direction, thr,
-        first_step(sd_z, thr, span, options), options, on_point,
-    )  # fmt: skip
+        problem,
+        [estimate],
+        chi2_hat,
+        index,
+        direction,
+        thr,
+        first_step(sd_z, thr, span, options),
+        options,
+        on_point,
+    )
     counts = _Counts()
     ends: dict[str, End] = {}
     known: list[WalkPoint] = []
@@ -120,11 +127,18 @@ def settle_branch(
         side = [estimate] + points
         ends = {
             kind: locate(
-                problem, index, chi2_hat, float(z_hat[index]), t, side, options.refit,
-                options.end_tolerance, outermost=options.overshoot > 0,
+                problem,
+                index,
+                chi2_hat,
+                float(z_hat[index]),
+                t,
+                side,
+                options.refit,
+                options.end_tolerance,
+                outermost=options.overshoot > 0,
             )
             for kind, t in thresholds.items()
-        }  # fmt: skip
+        }
         sites = _sites(
             problem, index, side, ends, chi2_hat, thresholds, sd_z, thorough or checks.always
         )

@@ -55,9 +55,12 @@ def rise_root(chi2: float, chi2_hat: float) -> float:
 
 
 def bracket(
-    side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float,
+    side: Sequence[WalkPoint],
+    index: int,
+    chi2_hat: float,
+    threshold: float,
     outermost: bool = False,
-) -> tuple[WalkPoint, WalkPoint] | None:  # fmt: skip
+) -> tuple[WalkPoint, WalkPoint] | None:
     """Return the first (or outermost) pair of consecutive good points rising over the threshold.
 
     ``side`` runs from the estimate outwards (estimate first); failed points are skipped.

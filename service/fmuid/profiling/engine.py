@@ -195,12 +195,21 @@ def _walk_all(
     seed = problem.spec.seed
     tasks = [
         BranchTask(
-            problem, z_hat, fit.chi2, problem.names.index(n), d, thr["simultaneous"], sd[n],
-            options, pointwise=thr["pointwise"], valleys=tuple(valleys), seed=seed,
+            problem,
+            z_hat,
+            fit.chi2,
+            problem.names.index(n),
+            d,
+            thr["simultaneous"],
+            sd[n],
+            options,
+            pointwise=thr["pointwise"],
+            valleys=tuple(valleys),
+            seed=seed,
         )
         for n in names
         for d in (-1, 1)
-    ]  # fmt: skip
+    ]
     expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
     done: dict[tuple[int, int], int] = {}
 
@@ -331,9 +340,11 @@ def _null_direction(
             values = {name: ok[-1].value, **ok[-1].params}
             z = problem.to_z(values)
             local = structural_check(
-                jacobian(problem, z), problem.names, problem.scales,
+                jacobian(problem, z),
+                problem.names,
+                problem.scales,
                 [values[n] for n in problem.names],
-            )  # fmt: skip
+            )
             combos += local["non_identifiable_combinations"]
     for c in combos:
         if name in c["parameters"]:

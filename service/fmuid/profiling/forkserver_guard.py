@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import os
 
-from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_parent
+from fmuid.processes import die_with_parent
+from fmuid.profiling.pool_guard import POOL_PARENT_ENV
 
 die_with_parent()
 if os.environ.get(POOL_PARENT_ENV) != str(os.getppid()):

@@ -124,8 +124,11 @@ class _Meter:
             log.info(
                 "health check: %d runs of the %d experiment(s) at %.3g s each, about %.0f s "
                 "(shorten it with CheckOptions.health_grid)",
-                self.total, len(self.problem.experiments), per_run, per_run * self.total,
-            )  # fmt: skip
+                self.total,
+                len(self.problem.experiments),
+                per_run,
+                per_run * self.total,
+            )
         if self.progress is not None:
             left = per_run * max(self.total - self.done, 0)
             self.progress(
@@ -262,8 +265,9 @@ def ignored_parameters(
         )
     log.warning(
         "%s move(s) no output of FMU %s at the estimate (a zero sensitivity column)",
-        ", ".join(dead), model.model_name,
-    )  # fmt: skip
+        ", ".join(dead),
+        model.model_name,
+    )
     return dead
 
 

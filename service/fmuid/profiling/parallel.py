@@ -177,11 +177,15 @@ def _run_dask(
     unreliable = get_simulator(model).reset_reliable is False
     futures = [
         client.submit(
-            run_branch_anywhere, PickledTask(model.file, pickle.dumps(t)), model.sha256,
-            fmu_blob, unreliable, pure=False,
+            run_branch_anywhere,
+            PickledTask(model.file, pickle.dumps(t)),
+            model.sha256,
+            fmu_blob,
+            unreliable,
+            pure=False,
         )
         for t in tasks
-    ]  # fmt: skip
+    ]
     index = {f.key: k for k, f in enumerate(futures)}
     results: list[BranchResult | None] = [None] * len(tasks)
     for future in as_completed(futures):

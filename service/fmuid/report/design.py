@@ -79,18 +79,24 @@ def write_design_report(result: DesignResult, directory: Path) -> Path:
             cells.append(interval(p["ci"]) + ver)
         rows.append(cells)
     page.table(
-        ["rank", "design", "sensors", "score", *names], rows, table_id="designs",
+        ["rank", "design", "sensors", "score", *names],
+        rows,
+        table_id="designs",
         caption="Predicted simultaneous CIs at the nominal; in brackets: draws whose profile "
         "found the parameter identifiable",
-    )  # fmt: skip
+    )
     page.table(
         ["change to the recommended design", "score ratio", *names],
         [
-            [k, v["score_ratio"] if v["score_ratio"] is not None else "singular",
-             *(v["width"][n] if v["width"][n] is not None else v["status"][n] for n in names)]
+            [
+                k,
+                v["score_ratio"] if v["score_ratio"] is not None else "singular",
+                *(v["width"][n] if v["width"][n] is not None else v["status"][n] for n in names),
+            ]
             for k, v in result.tradeoffs.items()
         ],
-        table_id="tradeoffs", caption="Predicted CI widths [decades] after the change",
-    )  # fmt: skip
+        table_id="tradeoffs",
+        caption="Predicted CI widths [decades] after the change",
+    )
     page.figure(widths_figure(result), "widths", "Predicted and verified CI widths")
     return page.write()

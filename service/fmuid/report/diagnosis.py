@@ -83,17 +83,25 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
                     "yes" if v.get("excludes_off") else "no",
                 ]
                 for n, v in added.items()
-            ],  # fmt: skip
+            ],
             caption="Parameters of the added physics (profile-likelihood interval)",
         )
     ties = [t for t in d.get("indistinguishable", []) if isinstance(t, dict)]
     if ties:
         page.table(
             ["equally good effect", "parameters", "chi2", "test", "p-value"],
-            [[t["effect"], _params(t.get("parameters", {}), units), t.get("chi2"),
-              str(t.get("test", "")).replace("_", " "), _p(t.get("p_value"))] for t in ties],
+            [
+                [
+                    t["effect"],
+                    _params(t.get("parameters", {}), units),
+                    t.get("chi2"),
+                    str(t.get("test", "")).replace("_", " "),
+                    _p(t.get("p_value")),
+                ]
+                for t in ties
+            ],
             caption="Explanations this data cannot tell apart from the named one",
-        )  # fmt: skip
+        )
     absorbed = d.get("absorbed") or {}
     if absorbed:
         page.table(
@@ -109,7 +117,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
                     "; ".join(a.get("reasons") or []) or "no",
                 ]
                 for n, a in absorbed.items()
-            ],  # fmt: skip
+            ],
             caption="The original parameters without and with the added term",
         )
     if d.get("evidence"):
@@ -118,7 +126,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
             [
                 [TEST_NAMES.get(e["test"], e["test"]), _where(e), _p(e.get("p_value"))]
                 for e in d["evidence"]
-            ],  # fmt: skip
+            ],
             caption="Evidence of the mismatch (tests rejected at the family-wise level)",
         )
     if d.get("candidates"):
@@ -135,7 +143,7 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
                     c.get("stage", 1),
                 ]
                 for c in d["candidates"]
-            ],  # fmt: skip
+            ],
             caption="Every candidate of the catalogue",
         )
     correction = d.get("generic_correction")
@@ -144,20 +152,27 @@ def _tables(page: HtmlPage, d: dict[str, Any], units: dict[str, str]) -> None:
         mode = dyn.get("mode")
         lead = dyn.get("leads")
         share = correction.get("structure_fraction")
+        before, after = fmt(correction["chi2_before"]), fmt(correction["chi2_after"])
+        share_text = "not given (the correction reaches the noise floor)"
+        if share is not None:
+            share_text = f"{share:.0%}"
+        mode_text = "none found"
+        if mode:
+            hz, zeta = fmt(mode["frequency_hz"], 3), fmt(mode["damping"], 2)
+            mode_text = f"{hz} Hz, damping ratio {zeta}"
+        lead_text = "none"
+        if lead:
+            lead_text = f"{lead['output']} leads {lead['other']} by {fmt(lead['seconds'], 3)} s"
+        band = interval(dyn["frequency_hz"]) + " Hz" if dyn.get("frequency_hz") else "none"
         rows = [
             ["model", correction.get("model")],
-            ["chi2 before / after", f"{fmt(correction['chi2_before'])} / "
-                                    f"{fmt(correction['chi2_after'])}"],
+            ["chi2 before / after", f"{before} / {after}"],
             ["noise floor", correction.get("noise_chi2")],
-            ["share of the misfit that is structure",
-             "not given (the correction reaches the noise floor)" if share is None
-             else f"{share:.0%}"],
-            ["extra mode", "none found" if not mode else
-             f"{fmt(mode['frequency_hz'], 3)} Hz, damping ratio {fmt(mode['damping'], 2)}"],
-            ["band", interval(dyn["frequency_hz"]) + " Hz" if dyn.get("frequency_hz") else "none"],
-            ["leading output", "none" if not lead else
-             f"{lead['output']} leads {lead['other']} by {fmt(lead['seconds'], 3)} s"],
-        ]  # fmt: skip
+            ["share of the misfit that is structure", share_text],
+            ["extra mode", mode_text],
+            ["band", band],
+            ["leading output", lead_text],
+        ]
         page.table(["generic correction", "value"], rows, caption="What the misfit looks like")
 
 
@@ -260,23 +275,35 @@ def _effects_and_validation(page: HtmlPage, d: dict[str, Any]) -> None:
         page.table(
             ["step", "effect", "what it is", "chi2 before", "chi2 after", "p-value"],
             [
-                [k + 1, s["effect"], s["description"], s["chi2_before"], s["chi2_after"],
-                 _p(s["p_value"])]
+                [
+                    k + 1,
+                    s["effect"],
+                    s["description"],
+                    s["chi2_before"],
+                    s["chi2_after"],
+                    _p(s["p_value"]),
+                ]
                 for k, s in enumerate(steps)
             ],
             caption="Effects added one after another (forward selection)",
-        )  # fmt: skip
+        )
     checked = d.get("validation") or []
     if checked:
         page.table(
             ["test file", "output", "samples", "RMS error, base", "after each step", "final"],
             [
-                [v["experiment"], v["output"], v["n"], v["rms_base"],
-                 ", ".join(f"{x:.4g}" for x in v["rms_by_step"]) or "-", v["rms_final"]]
+                [
+                    v["experiment"],
+                    v["output"],
+                    v["n"],
+                    v["rms_base"],
+                    ", ".join(f"{x:.4g}" for x in v["rms_by_step"]) or "-",
+                    v["rms_final"],
+                ]
                 for v in checked
             ],
             caption="Held-out data: RMS of the simulation error (output units)",
-        )  # fmt: skip
+        )
     levels = (d.get("location") or {}).get("levels") or {}
     words = [v["words"] for v in levels.values() if v.get("words")]
     if words:

@@ -132,7 +132,7 @@ def _profile_sections(page: HtmlPage, result: ProfileResult, problem: Problem | 
                 p.scale,
             ]
             for name, p in result.parameters.items()
-        ],  # fmt: skip
+        ],
         table_id="summary",
         caption="Estimates and likelihood-based confidence intervals (in the unit given)",
     )

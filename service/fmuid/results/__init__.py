@@ -287,18 +287,27 @@ def _renamed(data: dict[str, Any]) -> dict[str, Any]:
 
 def _step(e: dict[str, Any]) -> EffectStep:
     return EffectStep(
-        e["effect"], e.get("label", e["effect"]), e.get("description", ""),
+        e["effect"],
+        e.get("label", e["effect"]),
+        e.get("description", ""),
         {k: _added(v) for k, v in e.get("parameters", {}).items()},
-        float(e["chi2_before"]), float(e["chi2_after"]), float(e["p_value"]),
-        float(e.get("p_adjusted", e["p_value"])), e.get("coupling_error"),
-    )  # fmt: skip
+        float(e["chi2_before"]),
+        float(e["chi2_after"]),
+        float(e["p_value"]),
+        float(e.get("p_adjusted", e["p_value"])),
+        e.get("coupling_error"),
+    )
 
 
 def _added(v: dict[str, Any]) -> AddedEstimate:
     return AddedEstimate(
-        float(v["estimate"]), _interval(v["ci"]), float(v["confidence"]), v.get("unit", ""),
-        float(v["off"]), bool(v["excludes_off"]),
-    )  # fmt: skip
+        float(v["estimate"]),
+        _interval(v["ci"]),
+        float(v["confidence"]),
+        v.get("unit", ""),
+        float(v["off"]),
+        bool(v["excludes_off"]),
+    )
 
 
 def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:

@@ -25,11 +25,23 @@ class Terms(ctypes.Structure):
     """Mirror of ``FmuidTerms`` in ``loop.c`` (same fields, same order)."""
 
     _fields_ = [
-        ("n_src", ctypes.c_long), ("src_refs", _P), ("n_terms", ctypes.c_long), ("input", _P),
-        ("source", _P), ("derivative", _P), ("kind", _P), ("coefficient", _P), ("shape", _P),
-        ("level", _P), ("previous", _P), ("g", _P), ("g_prev", _P), ("rate", _P), ("trend", _P),
+        ("n_src", ctypes.c_long),
+        ("src_refs", _P),
+        ("n_terms", ctypes.c_long),
+        ("input", _P),
+        ("source", _P),
+        ("derivative", _P),
+        ("kind", _P),
+        ("coefficient", _P),
+        ("shape", _P),
+        ("level", _P),
+        ("previous", _P),
+        ("g", _P),
+        ("g_prev", _P),
+        ("rate", _P),
+        ("trend", _P),
         ("min_gap", ctypes.c_double),
-    ]  # fmt: skip
+    ]
 
 
 def run_native_feedback(
@@ -65,13 +77,20 @@ def run_native_feedback(
         np.array([KINDS.index(t.kind) for t in terms], dtype=np.int32),
         np.array([t.coefficient for t in terms], dtype=np.float64),
         np.array([int(t.shape) if t.kind == "power" else t.shape for t in terms], dtype=float),
-        np.zeros(sources.size), np.zeros(sources.size), np.zeros(inputs.size),
-        np.zeros(inputs.size), np.zeros(sources.size), np.zeros(inputs.size),
-    ]  # fmt: skip
+        np.zeros(sources.size),
+        np.zeros(sources.size),
+        np.zeros(inputs.size),
+        np.zeros(inputs.size),
+        np.zeros(sources.size),
+        np.zeros(inputs.size),
+    ]
     spec = Terms(
-        sources.size, ctypes.addressof(sources.refs), len(terms),
-        *(int(a.ctypes.data) for a in arrays), feedback.min_gap,
-    )  # fmt: skip
+        sources.size,
+        ctypes.addressof(sources.refs),
+        len(terms),
+        *(int(a.ctypes.data) for a in arrays),
+        feedback.min_gap,
+    )
     loop, result, _alive = build_loop(instance, plan, inputs, outputs, interpolate, None)
     status = lib.fmuid_feedback(ctypes.byref(loop), ctypes.byref(spec))  # fmi2DoStep fmi3DoStep
     if not status:

@@ -30,15 +30,37 @@ class Loop(ctypes.Structure):
     """Mirror of ``FmuidLoop`` in ``loop.c`` (same fields, same order)."""
 
     _fields_ = [
-        ("component", _P), ("set_real", _P), ("set_derivatives", _P), ("do_step", _P),
-        ("get_real", _P), ("fmi3", ctypes.c_int), ("n_times", _LONG), ("times", _P),
-        ("value", _P), ("slope", _P), ("moving", _P), ("n_in", _LONG), ("in_refs", _P),
-        ("n_cont", _LONG), ("cont_index", _P), ("cont_refs", _P), ("orders", _P),
-        ("use_derivatives", ctypes.c_int), ("sub_step", ctypes.c_double), ("n_out", _LONG),
-        ("out_refs", _P), ("row_start", _P), ("rows", _P), ("result", _P), ("work", _P),
-        ("fail_k", _LONG), ("fail_call", ctypes.c_int), ("fail_time", ctypes.c_double),
-        ("terminate", ctypes.c_bool), ("last_time", ctypes.c_double),
-    ]  # fmt: skip
+        ("component", _P),
+        ("set_real", _P),
+        ("set_derivatives", _P),
+        ("do_step", _P),
+        ("get_real", _P),
+        ("fmi3", ctypes.c_int),
+        ("n_times", _LONG),
+        ("times", _P),
+        ("value", _P),
+        ("slope", _P),
+        ("moving", _P),
+        ("n_in", _LONG),
+        ("in_refs", _P),
+        ("n_cont", _LONG),
+        ("cont_index", _P),
+        ("cont_refs", _P),
+        ("orders", _P),
+        ("use_derivatives", ctypes.c_int),
+        ("sub_step", ctypes.c_double),
+        ("n_out", _LONG),
+        ("out_refs", _P),
+        ("row_start", _P),
+        ("rows", _P),
+        ("result", _P),
+        ("work", _P),
+        ("fail_k", _LONG),
+        ("fail_call", ctypes.c_int),
+        ("fail_time", ctypes.c_double),
+        ("terminate", ctypes.c_bool),
+        ("last_time", ctypes.c_double),
+    ]
 
 
 def _address(instance: Instance, name: str) -> int | None:
@@ -78,8 +100,12 @@ def build_loop(
         if len(kept) >= LOOPS_KEPT:
             for old in kept:
                 del inputs.helpers[old]
-        cached = (plan, outputs, instance, *_new_loop(instance, plan, inputs, outputs,
-                                                      derivatives, sub_step))  # fmt: skip
+        cached = (
+            plan,
+            outputs,
+            instance,
+            *_new_loop(instance, plan, inputs, outputs, derivatives, sub_step),
+        )
         inputs.helpers[key] = cached
     loop, alive = cached[3], cached[4]
     component = instance.component
@@ -90,9 +116,13 @@ def build_loop(
 
 
 def _new_loop(
-    instance: Instance, plan: RunPlan, inputs: Channels, outputs: Channels, derivatives: bool,
+    instance: Instance,
+    plan: RunPlan,
+    inputs: Channels,
+    outputs: Channels,
+    derivatives: bool,
     sub_step: float | None,
-) -> tuple[Loop, list[object]]:  # fmt: skip
+) -> tuple[Loop, list[object]]:
     p = instance.prefix
     grid = plan.arrays
     work = np.empty(inputs.size + outputs.size)
@@ -102,17 +132,32 @@ def _new_loop(
     orders = np.ones(len(cont), dtype=np.int32)
     float_type = "Float64" if instance.v3 else "Real"
     loop = Loop(
-        None, _address(instance, f"{p}Set{float_type}"),
+        None,
+        _address(instance, f"{p}Set{float_type}"),
         _address(instance, "fmi2SetRealInputDerivatives") if derivatives else None,
-        _address(instance, f"{p}DoStep"), _address(instance, f"{p}Get{float_type}"),
-        int(instance.v3), len(plan.times), _pointer(grid.times), _pointer(grid.value),
-        _pointer(grid.slope), None if sub_step is None else _pointer(grid.moving),
-        inputs.size, _pointer(inputs.refs), len(cont), _pointer(cont_index),
-        _pointer(cont_refs), _pointer(orders), int(derivatives),
-        math.inf if sub_step is None else sub_step, outputs.size,
-        _pointer(outputs.refs), _pointer(grid.row_start), _pointer(grid.rows), None,
+        _address(instance, f"{p}DoStep"),
+        _address(instance, f"{p}Get{float_type}"),
+        int(instance.v3),
+        len(plan.times),
+        _pointer(grid.times),
+        _pointer(grid.value),
+        _pointer(grid.slope),
+        None if sub_step is None else _pointer(grid.moving),
+        inputs.size,
+        _pointer(inputs.refs),
+        len(cont),
+        _pointer(cont_index),
+        _pointer(cont_refs),
+        _pointer(orders),
+        int(derivatives),
+        math.inf if sub_step is None else sub_step,
+        outputs.size,
+        _pointer(outputs.refs),
+        _pointer(grid.row_start),
+        _pointer(grid.rows),
+        None,
         _pointer(work),
-    )  # fmt: skip
+    )
     return loop, [grid, work, cont_index, cont_refs, orders]
 
 
@@ -151,9 +196,13 @@ def run_native_cosimulation(
 
 
 def failure(
-    instance: Instance, plan: RunPlan, inputs: Channels, outputs: Channels, loop: Loop,
+    instance: Instance,
+    plan: RunPlan,
+    inputs: Channels,
+    outputs: Channels,
+    loop: Loop,
     status: int,
-) -> float:  # fmt: skip
+) -> float:
     """Raise the Python loop's error for the failed call, or return the stop time asked for."""
     k, call = loop.fail_k, loop.fail_call
     t = plan.times[k]

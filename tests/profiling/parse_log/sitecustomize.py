@@ -1,4 +1,4 @@
-"""Log every FmuModel parse with the process id (``tests/profiles/test_parse_once.py``).
+"""Log every FmuModel parse with the process id (``tests/profiling/test_parse_once.py``).
 
 Python imports this module at start-up in every process whose ``PYTHONPATH`` holds this folder:
 the job process, the forkserver and, through it, every pool worker.

@@ -20,9 +20,12 @@ def test_a_design_job_rerun_after_a_restart_redoes_no_finished_evaluation(
     store = JobStore(tmp_path / "jobs.sqlite", tmp_path)
     space = stored_file(store, text=json.dumps({**MSD_SPACE, **SMALL}))
     job = store.create(
-        "design", json.dumps(MSD_SPEC), stored_file(store, builtin_fmu("msd")), "msd",
+        "design",
+        json.dumps(MSD_SPEC),
+        stored_file(store, builtin_fmu("msd")),
+        "msd",
         [Dataset("E.json", space)],
-    )  # fmt: skip
+    )
     calls = counting(monkeypatch)
     events = []
 

@@ -43,9 +43,12 @@ def brute_force_profile(fmu: Path, taus: np.ndarray, y: np.ndarray) -> np.ndarra
         out = []
         for tau in taus:
             g = sim.simulate(
-                {"tau": float(tau), "K": 1.0, **JITTER}, np.array([0.0, 5.0]),
-                {"u": np.ones(2)}, TIME, ["y"],
-            )[:, 0]  # fmt: skip
+                {"tau": float(tau), "K": 1.0, **JITTER},
+                np.array([0.0, 5.0]),
+                {"u": np.ones(2)},
+                TIME,
+                ["y"],
+            )[:, 0]
             k = (g @ y) / (g @ g)
             out.append(float(np.sum(((y - k * g) / SIGMA) ** 2)))
     finally:

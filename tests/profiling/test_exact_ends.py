@@ -84,8 +84,14 @@ def test_fit_without_global_search_is_checked(tractor_fmu):
     best = np.inf
     for z0 in [problem.to_z_array(problem.start), *(lo + u * (hi - lo) for u in unit)]:
         res = least_squares(
-            problem.residuals, z0, bounds=(lo, hi), method="trf", x_scale="jac", ftol=1e-10,
-            xtol=1e-10, gtol=1e-10,
-        )  # fmt: skip
+            problem.residuals,
+            z0,
+            bounds=(lo, hi),
+            method="trf",
+            x_scale="jac",
+            ftol=1e-10,
+            xtol=1e-10,
+            gtol=1e-10,
+        )
         best = min(best, 2.0 * res.cost)
     assert result.chi2 <= best + 1e-3 * result.thresholds["simultaneous"]

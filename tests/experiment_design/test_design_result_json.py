@@ -72,7 +72,7 @@ def test_open_intervals_unverified_designs_and_non_finite_numbers_read_back(tmp_
                         "width_z": math.inf,
                     }
                 },
-            ),  # fmt: skip
+            ),
         ),
         not_identifiable_by_any=[{"parameters": ["k1", "k2"], "meaning": "only k1 + k2"}],
         tradeoffs={"drop x": {"score_ratio": None}},
@@ -104,7 +104,8 @@ def test_a_design_read_back_draws_the_report_of_the_computed_one(serial, msd_spe
     pages = []
     for name, result in (("computed", serial), ("read", back)):
         out = tmp_path / name
-        write_report(result, out, fmu=builtin_fmu("msd"), experiments=[space_of(**SMALL)],
-                     spec=msd_spec)  # fmt: skip
+        write_report(
+            result, out, fmu=builtin_fmu("msd"), experiments=[space_of(**SMALL)], spec=msd_spec
+        )
         pages.append((out / "index.html").read_text())
     assert pages[1] == pages[0]

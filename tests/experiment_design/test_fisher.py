@@ -23,9 +23,13 @@ def scipy_x(params, trial):
     m, k, b = params["m"], params["k"], params["b"]
     sol = solve_ivp(
         lambda t, y: [y[1], (np.interp(t, t_in, u) - b * y[1] - k * y[0]) / m],
-        (0.0, trial.duration), [0.0, 0.0], t_eval=output_times(trial),
-        rtol=1e-11, atol=1e-13, max_step=0.005,
-    )  # fmt: skip
+        (0.0, trial.duration),
+        [0.0, 0.0],
+        t_eval=output_times(trial),
+        rtol=1e-11,
+        atol=1e-13,
+        max_step=0.005,
+    )
     return sol.y[0]
 
 
@@ -66,11 +70,18 @@ def test_predicted_widths_agree_with_profiles_on_simulated_data(msd_spec, msd_sp
 
 
 def test_msd_parallel_reports_k1_k2_not_identifiable_by_any_experiment():
-    spec = spec_from_json(json.dumps({
-        "parameters": {n: {"start": v, "lower": 0.01, "upper": 5} for n, v in
-                       {"m": 1.1, "k1": 3.0, "k2": 1.4, "b": 1.6}.items()},
-        "inputs": ["f"], "outputs": {"x": {"sigma": 0.1}},
-    }))  # fmt: skip
+    spec = spec_from_json(
+        json.dumps(
+            {
+                "parameters": {
+                    n: {"start": v, "lower": 0.01, "upper": 5}
+                    for n, v in {"m": 1.1, "k1": 3.0, "k2": 1.4, "b": 1.6}.items()
+                },
+                "inputs": ["f"],
+                "outputs": {"x": {"sigma": 0.1}},
+            }
+        )
+    )
     space = space_of(robust={"points": 0}, verify_designs=0, candidates=2)
     result = design("msd_parallel", spec, space)
     assert result.to_dict()["not_identifiable_by_any"] == [

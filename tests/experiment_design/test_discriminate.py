@@ -26,18 +26,24 @@ TAU = 0.3
 SPACE = {
     "input": "f",
     "families": {"step": {"amplitude": [0.3, 1.0], "time": [1.0, 1.0]}},
-    "duration": 6.0, "rates_hz": [5, 10],
+    "duration": 6.0,
+    "rates_hz": [5, 10],
     "outputs": {"x": {"sigma": 0.005}, "v": {"sigma": 0.01}},
-    "base_outputs": ["x"], "max_sensors": 2, "longest_test": 6.0, "candidates": 3,
-}  # fmt: skip
+    "base_outputs": ["x"],
+    "max_sensors": 2,
+    "longest_test": 6.0,
+    "candidates": 3,
+}
 SPEC = {
     "parameters": {
         "m": {"start": 1.1, "lower": 0.1, "upper": 10},
         "k": {"start": 4.4, "lower": 0.1, "upper": 40},
         "b": {"start": 1.6, "lower": 0.1, "upper": 10},
     },
-    "inputs": ["f"], "outputs": {"x": {"sigma": 0.005}}, "global_search": False,
-}  # fmt: skip
+    "inputs": ["f"],
+    "outputs": {"x": {"sigma": 0.005}},
+    "global_search": False,
+}
 
 
 @pytest.fixture(scope="module")
@@ -48,13 +54,17 @@ def proposal():
     tau = AddedParameter("tau_outputs", "s", "lag", added, 0.0, "low")
     wait = AddedParameter("delay_f", "s", "delay", added, 0.0, "low")
     lag = Hypothesis(
-        "output_lag", {**spec.parameters, "tau_outputs": added}, {**truth, "tau_outputs": TAU},
+        "output_lag",
+        {**spec.parameters, "tau_outputs": added},
+        {**truth, "tau_outputs": TAU},
         (OutputLag("", (tau,)),),
-    )  # fmt: skip
+    )
     delay = Hypothesis(
-        "input_delay", {**spec.parameters, "delay_f": added}, {**truth, "delay_f": TAU},
+        "input_delay",
+        {**spec.parameters, "delay_f": added},
+        {**truth, "delay_f": TAU},
         (InputDelay("f", (wait,)),),
-    )  # fmt: skip
+    )
     return spec, space, lag, delay, discriminating_experiment("msd", spec, space, lag, delay)
 
 

@@ -44,9 +44,16 @@ class ReferenceProfile:
 
             x0 = np.clip(z[self.free], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
             res = least_squares(
-                fun, x0, bounds=(lo, hi), method="trf", x_scale="jac", ftol=1e-10, xtol=1e-10,
-                gtol=1e-10, diff_step=1e-7,
-            )  # fmt: skip
+                fun,
+                x0,
+                bounds=(lo, hi),
+                method="trf",
+                x_scale="jac",
+                ftol=1e-10,
+                xtol=1e-10,
+                gtol=1e-10,
+                diff_step=1e-7,
+            )
             if 2.0 * res.cost < best:
                 best = 2.0 * res.cost
                 best_z = z.copy()

@@ -1,13 +1,15 @@
 import numpy as np
 
-from fmuid.plots import CiEntry, ci_compilation_figure, ci_entries_from_profile
+from fmuid.demo.compilation import CiEntry, ci_compilation_figure, ci_entries_from_profile
+from plots.toy import toy_profile_result
 
 
 def _gid(ax, gid):
     return [line for line in ax.lines if line.get_gid() == gid]
 
 
-def test_compilation_bars_arrows_estimates_and_truth(profile_result):
+def test_compilation_bars_arrows_estimates_and_truth():
+    profile_result = toy_profile_result()
     entries = ci_entries_from_profile(
         profile_result, "SNR 100", group="ramp", true_values={"m": 1.1, "k": 9.0}
     ) + ci_entries_from_profile(profile_result, "SNR 25", group="ramp")

@@ -28,8 +28,13 @@ def msd_x(x0=0.0, m=1.1, k=4.4, b=1.6):
     samples = force(T)
     sol = solve_ivp(
         lambda tt, y: [y[1], (np.interp(tt, T, samples) - b * y[1] - k * y[0]) / m],
-        (0.0, T[-1]), [x0, 0.0], t_eval=T, rtol=1e-10, atol=1e-12, max_step=0.05,
-    )  # fmt: skip
+        (0.0, T[-1]),
+        [x0, 0.0],
+        t_eval=T,
+        rtol=1e-10,
+        atol=1e-12,
+        max_step=0.05,
+    )
     return sol.y[0]
 
 
@@ -78,8 +83,12 @@ def test_held_out_rms_is_the_simulation_error_after_the_settle_window(msd_fmu):
     (entry,) = held_out_rms(problem.predictor, wrong, [test], ["x"], settle=5.0)
     assert (entry.experiment, entry.output, entry.n) == ("test.csv", "x", int(kept.sum()))
     assert entry.rms_base == pytest.approx(expected, rel=1e-4)
-    assert entry.to_dict() == {"experiment": "test.csv", "output": "x", "n": entry.n,
-                               "rms_base": entry.rms_base}  # fmt: skip
+    assert entry.to_dict() == {
+        "experiment": "test.csv",
+        "output": "x",
+        "n": entry.n,
+        "rms_base": entry.rms_base,
+    }
     steps = entry.with_steps([entry.rms_base, 0.5 * entry.rms_base]).to_dict()
     assert steps["rms_final"] == steps["rms_by_step"][-1] == 0.5 * entry.rms_base
 
@@ -112,8 +121,21 @@ def test_cli_takes_test_data_and_settle(msd_fmu, tmp_path, capsys):
     spec_file = tmp_path / "spec.json"
     spec_file.write_text(json.dumps(spec().model_dump()))
     out = tmp_path / "fit.json"
-    args = ["fit", "--fmu", msd_fmu, "--data", data, "--spec", spec_file, "--out", out,
-            "--settle", "10", "--test-data", data]  # fmt: skip
+    args = [
+        "fit",
+        "--fmu",
+        msd_fmu,
+        "--data",
+        data,
+        "--spec",
+        spec_file,
+        "--out",
+        out,
+        "--settle",
+        "10",
+        "--test-data",
+        data,
+    ]
     assert main([str(a) for a in args]) == 0, capsys.readouterr().err
     result = json.loads(out.read_text())
     assert result["n_data"] == int(np.sum(T >= 10.0))

@@ -1,9 +1,9 @@
 import dataclasses
 import math
 
+from fmuid.demo.advice import StudyCase, advice_tables, study_verdict, trade_partners
 from fmuid.demo.report import _cell
 from fmuid.profiling.result import ProfilePoint
-from fmuid.report.advice import StudyCase, advice_tables, study_verdict, trade_partners
 from plots.toy import CHI2_OPT, toy_profile_result
 
 

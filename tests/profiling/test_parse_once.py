@@ -48,8 +48,10 @@ def test_a_profile_job_parses_the_fmu_once_per_process(msd_fmu, tmp_path):
     data = msd_step_data(**TRUTH, sigma=0.3, seed=5)
     body = {
         "parameters": {n: {"start": v, "lower": 0.01, "upper": 5.0} for n, v in TRUTH.items()},
-        "inputs": ["f"], "outputs": {"x": {"sigma": 0.3}}, "global_search": False,
-    }  # fmt: skip
+        "inputs": ["f"],
+        "outputs": {"x": {"sigma": 0.3}},
+        "global_search": False,
+    }
     fmu_sha = _blob(store, Path(msd_fmu).read_bytes())
     job = store.create(
         "profile", json.dumps(body), fmu_sha, "msd", [Dataset("step.csv", _blob(store, _csv(data)))]
