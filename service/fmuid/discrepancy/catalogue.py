@@ -360,4 +360,4 @@ def catalogue(
 
 def study_catalogue(problem: Problem, values: Mapping[str, float]) -> list[fx.Effect]:
     """Return the catalogue of an estimation problem at its fitted ``values``."""
-    return catalogue(problem, model_knowledge(problem.fmu_path, problem.spec), values)
+    return catalogue(problem, model_knowledge(problem.model, problem.spec), values)

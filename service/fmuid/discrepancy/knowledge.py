@@ -27,6 +27,7 @@ from pathlib import Path
 
 from fmuid.data import ParameterSpec, Spec
 from fmuid.model.annotations import fmuid_annotation
+from fmuid.model.fmu import FmuModel
 
 log = logging.getLogger(__name__)
 
@@ -105,12 +106,14 @@ def _parameter(element: ET.Element, where: str) -> AddedParameter:
     return AddedParameter(a["name"], a.get("unit", ""), a.get("description", ""), spec, off, side)
 
 
-def read_annotations(fmu_path: str | Path) -> ModelKnowledge:
+def read_annotations(fmu: FmuModel | str | Path) -> ModelKnowledge:
     """Read the ``fmuid`` vendor annotation of an FMU (empty knowledge when it has none).
 
-    A malformed annotation is logged and ignored: the FMU stays usable without it.
+    ``fmu`` is a parsed model (its annotation is not read again) or a file's path. A malformed
+    annotation is logged and ignored: the FMU stays usable without it.
     """
-    model = fmuid_annotation(fmu_path)
+    fmu_path = getattr(fmu, "path", fmu)
+    model = fmuid_annotation(fmu)
     if model is None:
         return ModelKnowledge()
     try:
@@ -129,9 +132,9 @@ def read_annotations(fmu_path: str | Path) -> ModelKnowledge:
     return ModelKnowledge(physics, roles)
 
 
-def model_knowledge(fmu_path: str | Path, spec: Spec) -> ModelKnowledge:
+def model_knowledge(fmu: FmuModel | str | Path, spec: Spec) -> ModelKnowledge:
     """Return the FMU's declared knowledge with the spec's ``physics`` added (the spec wins)."""
-    declared = read_annotations(fmu_path)
+    declared = read_annotations(fmu)
     physics = {p.effect: p for p in declared.physics}
     for effect, entry in spec.physics.items():
         params = tuple(
