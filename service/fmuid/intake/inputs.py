@@ -5,35 +5,11 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
+from fmuid.jobs.kinds import JobInputs, runner
 from fmuid.jobs.records import TEST_DATA
 from fmuid.jobs.store import Job, JobStore
-
-
-@dataclass(frozen=True)
-class JobInputs:
-    """What the engine needs to run a job (or to draw its report).
-
-    Attributes
-    ----------
-    fmu
-        The FMU file.
-    spec
-        The parsed spec.
-    experiments
-        The experiments of a fit, profile or diagnosis; for a design, its one experiment space.
-    test_data
-        The held-out experiments (empty for a design).
-
-    """
-
-    fmu: Path
-    spec: Any
-    experiments: list[Any]
-    test_data: list[Any]
 
 
 def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[Path]]:
@@ -65,22 +41,25 @@ def stage_inputs(store: JobStore, job: Job, workdir: Path) -> tuple[Path, list[P
 def load_job_inputs(
     store: JobStore, job: Job, workdir: Path, on_staged: Callable[[Path], None] | None = None
 ) -> JobInputs:
-    """Stage the job's files in ``workdir`` and parse its spec, experiments and held-out data.
+    """Stage the job's files in ``workdir`` and parse its spec, held-out data and kind's inputs.
 
     ``on_staged`` is called with the FMU's path once the files are staged, before anything is
-    parsed. A design job's one dataset is its experiment space (:mod:`fmuid.experiment_design`
-    is imported for such a job only).
+    parsed. What the kind reads besides (experiments, or a design's space) is its runner's
+    ``load`` (:mod:`fmuid.jobs.kinds`).
+
+    Raises
+    ------
+    SpecError
+        If the job's kind is unknown (before anything is staged), or its spec or space is bad.
+
     """
     from fmuid.data import load_experiment, spec_from_json
 
+    kind = runner(job.kind)
     fmu, paths = stage_inputs(store, job, workdir)
     if on_staged is not None:
         on_staged(fmu)
     spec = spec_from_json(job.spec, "spec")
     tests = [load_experiment(p) for p in paths if p.parent.name == TEST_DATA]
     data = [p for p in paths if p.parent.name != TEST_DATA]
-    if job.kind == "design":
-        from fmuid.experiment_design import load_space
-
-        return JobInputs(fmu, spec, [load_space(data[0])], tests)
-    return JobInputs(fmu, spec, [load_experiment(path) for path in data], tests)
+    return kind.load(JobInputs(fmu, spec, [], tests), job, data)

@@ -17,9 +17,10 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
-from fmuid.errors import FmuidError
+from fmuid.errors import FmuidError, SpecError
 from fmuid.intake.pool import VettingPool
 from fmuid.intake.vet import VetTask
+from fmuid.jobs.kinds import runner
 from fmuid.jobs.records import TEST_DATA, Kind
 from fmuid.jobs.store import Dataset, Job, JobStore
 from fmuid.model.builtin import BUILTIN_MODELS, builtin_fmu
@@ -109,7 +110,7 @@ def submit(
     settings
         The limits of the checks.
     kind
-        ``"fit"``, ``"profile"``, ``"diagnose"`` or ``"design"``.
+        ``"fit"``, ``"profile"``, ``"diagnose"`` or ``"design"`` (:mod:`fmuid.jobs.kinds`).
     spec
         The study specification (JSON text).
     data
@@ -130,15 +131,19 @@ def submit(
     Raises
     ------
     SubmissionError
-        With status 422 naming the problem (bad FMU, CSV, spec, a mismatch between them or a
-        limit), or 503 when a built-in model is missing.
+        With status 422 naming the problem (unknown kind, bad FMU, CSV, spec, a mismatch between
+        them or a limit), or 503 when a built-in model is missing.
 
     """
     test_data = test_data or []
-    if kind == "design":
+    try:
+        takes_space = runner(kind).takes_space
+    except SpecError as exc:
+        raise SubmissionError(422, str(exc)) from exc
+    if takes_space:
         if test_data:
-            raise SubmissionError(422, "test_data: kind 'design' takes no test data")
-        return _submit_design(store, pool, settings, spec, data, space, fmu, model)
+            raise SubmissionError(422, f"test_data: kind {kind!r} takes no test data")
+        return _submit_space(store, pool, settings, kind, spec, data, space, fmu, model)
     if space is not None:
         raise SubmissionError(422, f"space: only kind 'design' takes a space, not {kind!r}")
     if not data:
@@ -174,21 +179,25 @@ def submit(
     return store.create(kind, spec, fmu_sha, answer["model_name"], datasets)
 
 
-def _submit_design(
+def _submit_space(
     store: JobStore,
     pool: VettingPool,
     settings: Settings,
+    kind: Kind,
     spec: str,
     data: list[Upload],
     space: Upload | None,
     fmu: Upload | None,
     model: str | None,
 ) -> Job:
-    """Check and queue a design job: the space is stored as its one dataset, ``space.json``."""
+    """Check and queue a design job: its space is stored in the job's ``space`` column.
+
+    The text stored is the text checked (undecodable bytes replaced in both).
+    """
     if data:
-        raise SubmissionError(422, "data: kind 'design' takes a 'space' file, not data")
+        raise SubmissionError(422, f"data: kind {kind!r} takes a 'space' file, not data")
     if space is None:
-        raise SubmissionError(422, "space: kind 'design' needs the experiment space (E.json)")
+        raise SubmissionError(422, f"space: kind {kind!r} needs the experiment space (E.json)")
     with tempfile.TemporaryDirectory(dir=store.tmp_dir()) as tmp:
         workdir = Path(tmp)
         (workdir / "spec.json").write_text(spec, encoding="utf-8", errors="replace")
@@ -199,8 +208,8 @@ def _submit_design(
         if not answer["ok"]:
             raise SubmissionError(answer["status"], answer["detail"])
         fmu_sha = store.add_file(workdir / fmu_file)
-        datasets = [Dataset("space.json", store.add_file(space_path))]
-    return store.create("design", spec, fmu_sha, answer["model_name"], datasets)
+        text = space_path.read_text(errors="replace")
+    return store.create(kind, spec, fmu_sha, answer["model_name"], [], space=text)
 
 
 def _task(

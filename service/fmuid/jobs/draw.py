@@ -8,7 +8,7 @@ the FMU, the data and the spec back from the store, draws into the marker folder
 to ``reports/<id>/``; when drawing fails it writes the reason to ``reports/<id>.error`` instead
 (paths: :class:`fmuid.jobs.layout.DataLayout`). The job's row is never touched: a report that
 cannot be drawn leaves the job ``done``. The result object is read back from the stored JSON
-(:func:`fmuid.results.result_from_dict`), whatever the job's kind.
+(:func:`fmuid.results.result_from_dict`) and drawn by the runner of the job's kind.
 """
 
 from __future__ import annotations
@@ -23,31 +23,28 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from fmuid.jobs.kinds import JobInputs, runner
 from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.proc import JOB_NICENESS
-from fmuid.jobs.store import JobStore
+from fmuid.jobs.store import Job, JobStore
 from fmuid.processes import limit_memory
 from fmuid.profiling.pool_guard import die_with_pool_owner
 
 logger = logging.getLogger(__name__)
 
 
-def write_report(
-    result: Any, layout: DataLayout, job_id: str, fmu: Path, experiments: list[Any], spec: Any
-) -> None:
+def write_report(job: Job, result: Any, inputs: JobInputs, layout: DataLayout) -> None:
     """Write a job's HTML report (or its error file saying why not).
 
-    It is drawn in the job's report marker (made by whoever started the drawing) and renamed
-    to the job's report folder.
+    It is drawn by the runner of the job's kind (:mod:`fmuid.jobs.kinds`) in the job's report
+    marker (made by whoever started the drawing) and renamed to the job's report folder.
     """
-    directory, tmp = layout.report(job_id), layout.report_marker(job_id)
-    error_file = layout.report_error(job_id)
+    directory, tmp = layout.report(job.id), layout.report_marker(job.id)
+    error_file = layout.report_error(job.id)
     try:
-        from fmuid.report import write_report as report
-
-        report(result, tmp, fmu=fmu, experiments=experiments, spec=spec)
+        runner(job.kind).draw(result, inputs, tmp)
     except Exception as exc:  # a failed report must not fail a finished job
-        logger.exception("report of %s failed", job_id)
+        logger.exception("report of %s failed", job.id)
         shutil.rmtree(tmp, ignore_errors=True)
         with contextlib.suppress(OSError):
             error_file.write_text(f"{type(exc).__name__}: {exc}")
@@ -78,7 +75,7 @@ def draw_job_report(db_path: Path, data_dir: Path, job_id: str, memory_mb: int) 
         with tempfile.TemporaryDirectory(prefix=f"fmuid-report-{job_id[:8]}-") as work:
             inputs = load_job_inputs(store, job, Path(work))
             result = result_from_dict(json.loads(text))
-            write_report(result, layout, job_id, inputs.fmu, inputs.experiments, inputs.spec)
+            write_report(job, result, inputs, layout)
     except Exception as exc:  # reading the job back failed: say why, the job stays done
         logger.exception("report of %s failed", job_id)
         shutil.rmtree(tmp, ignore_errors=True)

@@ -55,11 +55,15 @@ class Job:
     spec
         The study specification as JSON text, exactly as submitted.
     datasets
-        The CSV files, in submission order.
+        The CSV files, in submission order (a design stored before the ``space`` column: its
+        space as the one dataset).
     attempts
         How many times a job process was started for it.
     pid
         Process id of its job process while running.
+    space
+        A design's experiment space as JSON text, exactly as submitted (``None``: other kinds,
+        and designs stored before this column).
 
     """
 
@@ -80,6 +84,7 @@ class Job:
     datasets: tuple[Dataset, ...]
     attempts: int
     pid: int | None
+    space: str | None = None
 
     @classmethod
     def from_row(cls, row: sqlite3.Row) -> Job:

@@ -5,9 +5,9 @@ the bootstrap of :mod:`fmuid.jobs.proc`, which makes it die with the service), s
 hang or runaway memory of the FMU hits only this process (and the pool workers the engine starts
 from it), which the supervisor can kill as a group. This process limits its own address space,
 enforces its own time limit (it records the failure and kills its group), loads the job's inputs
-from the store, runs the engine, reports progress at most every :data:`PROGRESS_INTERVAL_S` and
-stores the result (or the reason it failed). The HTML report is drawn later, on its first
-request (:mod:`fmuid.jobs.draw`).
+from the store, runs the engine of the job's kind (its runner, :mod:`fmuid.jobs.kinds`), reports
+progress at most every :data:`PROGRESS_INTERVAL_S` and stores the result (or the reason it
+failed). The HTML report is drawn later, on its first request (:mod:`fmuid.jobs.draw`).
 """
 
 from __future__ import annotations
@@ -29,14 +29,13 @@ import traceback
 import zipfile
 from collections.abc import Iterator
 from concurrent.futures.process import BrokenProcessPool
-from contextlib import ExitStack
 from pathlib import Path
-from typing import Any
 
 from fmuid.errors import FmuidError
 from fmuid.intake.inputs import load_job_inputs
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.health import free_space_problem
+from fmuid.jobs.kinds import RunContext, runner
 from fmuid.jobs.reaper import end_tree_on_parent_death, kill_tree
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.processes import become_subreaper, kill_group, limit_memory
@@ -109,54 +108,6 @@ class ProgressWriter:
                 logger.warning("progress of job %s not recorded: %s", self.job_id, exc)
 
 
-def run_engine(
-    kind: str,
-    fmu: Path,
-    experiments: list[Any],
-    spec: Any,
-    progress: ProgressWriter,
-    dask_scheduler: str | None,
-    checkpoint: Path | None = None,
-    test_data: list[Any] | None = None,
-) -> Any:
-    """Call ``fmuid.fit``, ``profile``, ``diagnose`` or ``design`` and return its result.
-
-    For ``design``, ``experiments`` holds the experiment space instead of datasets, and
-    ``checkpoint`` the folder that keeps its finished evaluations across restarts.
-    ``test_data`` are the held-out experiments of a fit, profile or diagnosis.
-    """
-    tests = test_data or []
-    import fmuid
-
-    if kind == "fit":
-        return fmuid.fit(fmu, experiments, spec, progress=progress, test_data=tests)
-    if kind in ("profile", "design"):
-        with ExitStack() as stack:
-            executor = None
-            if dask_scheduler:
-                from distributed import Client
-
-                try:
-                    executor = stack.enter_context(Client(dask_scheduler, timeout="20s"))
-                except OSError as exc:
-                    raise FmuidError(
-                        f"cannot reach the dask scheduler at {dask_scheduler}: {exc}"
-                    ) from exc
-            if kind == "design":
-                return fmuid.design(
-                    fmu,
-                    spec,
-                    experiments[0],
-                    progress=progress,
-                    executor=executor,
-                    checkpoint=checkpoint,
-                )
-            return fmuid.profile(
-                fmu, experiments, spec, progress=progress, executor=executor, test_data=tests
-            )
-    return fmuid.diagnose(fmu, experiments, spec, progress=progress, test_data=tests)
-
-
 def run_job(
     store: JobStore, job: Job, memory_mb: int, dask: str | None, min_free_bytes: int = 0
 ) -> int:
@@ -175,16 +126,7 @@ def run_job(
     ):
         try:
             inputs = load_job_inputs(store, job, Path(tmp), on_staged=_log_fmi_version)
-            result = run_engine(
-                job.kind,
-                inputs.fmu,
-                inputs.experiments,
-                inputs.spec,
-                progress,
-                dask,
-                checkpoint,
-                inputs.test_data,
-            )
+            result = runner(job.kind).run(inputs, RunContext(progress, dask, checkpoint))
             result_json = json.dumps(result.to_dict(), allow_nan=False)
         except FmuidError as exc:
             store.fail(job.id, str(exc))

@@ -59,7 +59,8 @@ CREATE TABLE IF NOT EXISTS jobs (
     spec TEXT NOT NULL,
     datasets TEXT NOT NULL,
     attempts INTEGER NOT NULL DEFAULT 0,
-    pid INTEGER
+    pid INTEGER,
+    space TEXT
 );
 CREATE INDEX IF NOT EXISTS jobs_status_created ON jobs (status, created);
 CREATE TABLE IF NOT EXISTS results (
@@ -73,6 +74,10 @@ CREATE TABLE IF NOT EXISTS lease (
     heartbeat REAL NOT NULL
 );
 """
+
+_ADDED = {"progress_detail": "TEXT NOT NULL DEFAULT ''", "space": "TEXT"}
+"""Columns added to the jobs table since its first version (a design stored before ``space``
+keeps its space as its one dataset, which :mod:`fmuid.jobs.kinds` reads)."""
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -147,16 +152,17 @@ class JobStore:
         self.keep_reserve()
 
     def _add_missing_columns(self) -> None:
-        """Give a store made by an earlier version the columns added since (progress_detail)."""
+        """Give a store made by an earlier version the columns added since (:data:`_ADDED`)."""
         conn = self._connection()
         columns = {row[1] for row in conn.execute("PRAGMA table_info(jobs)")}
-        if "progress_detail" in columns:
-            return
-        try:
-            conn.execute("ALTER TABLE jobs ADD COLUMN progress_detail TEXT NOT NULL DEFAULT ''")
-        except sqlite3.OperationalError as exc:  # another process added it meanwhile
-            if "duplicate column" not in str(exc):
-                raise
+        for name, declaration in _ADDED.items():
+            if name in columns:
+                continue
+            try:
+                conn.execute(f"ALTER TABLE jobs ADD COLUMN {name} {declaration}")
+            except sqlite3.OperationalError as exc:  # another process added it meanwhile
+                if "duplicate column" not in str(exc):
+                    raise
 
     # -- connections -------------------------------------------------------------------------
 
@@ -248,8 +254,9 @@ class JobStore:
         fmu_sha256: str,
         model_name: str,
         datasets: list[Dataset],
+        space: str | None = None,
     ) -> Job:
-        """Insert a queued job and return it.
+        """Insert a queued job and return it (``space``: a design's experiment space, JSON text).
 
         Raises
         ------
@@ -267,7 +274,7 @@ class JobStore:
                     raise QueueFull(f"the queue is full: {queued} jobs wait (FMUID_QUEUE_LIMIT)")
             conn.execute(
                 "INSERT INTO jobs (id, kind, status, created, fmu_sha256, model_name, spec,"
-                " datasets) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
+                " datasets, space) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?)",
                 (
                     job_id,
                     kind,
@@ -276,6 +283,7 @@ class JobStore:
                     model_name,
                     spec,
                     json.dumps([{"name": d.name, "sha256": d.sha256} for d in datasets]),
+                    space,
                 ),
             )
         job = self.get(job_id)
