@@ -7,7 +7,7 @@
    effect leaves the residuals looking like noise. The base fit is re-checked from the best
    candidate's base parameters (a lower base optimum would otherwise pass for an effect).
 3. **Decide** (:mod:`.decide`): one weighted Holm family at the false-alarm level fixed in
-   advance (1 %) over the scan (min-P over the candidates, boundary-aware nulls), the
+   advance (0.5 %) over the scan (min-P over the candidates, boundary-aware nulls), the
    agreement test and the residual tests. A candidate is named when it is significant after the
    scan's adjustment and the augmented model's residuals pass; candidates that explain the
    data equally well are listed (Vuong's test, or equal predictions).

@@ -42,7 +42,7 @@ def diagnose(
     progress
         Receives ``Progress("diagnose", done, total, detail)`` events.
     options
-        Levels and effort (default: false-alarm level 0.01, 95% intervals).
+        Levels and effort (default: false-alarm level 0.005, 95% intervals).
     problem
         The problem ``fmuid.estimation.study.make_problem`` built of these inputs (default:
         built here).
