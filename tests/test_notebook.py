@@ -121,3 +121,15 @@ def test_a_diagnosis_loads_back_equal(study_dir):
     frame = diagnosis.to_frame()
     assert set(frame.index) >= {"k", "b", *diagnosis.added_parameters}
     assert frame.loc["k", "unit"] == "N/m" and frame.loc["b", "unit"] == "N.s/m"
+
+
+def test_the_estimation_stages_share_one_signature_shape() -> None:
+    import inspect
+
+    shapes = {}
+    for name in ("fit", "profile", "diagnose"):
+        params = inspect.signature(getattr(fmuid, name)).parameters.values()
+        positional = [p.name for p in params if p.kind is p.POSITIONAL_OR_KEYWORD]
+        assert positional == ["fmu", "experiments", "spec"], name
+        shapes[name] = {p.name for p in params if p.kind is p.KEYWORD_ONLY}
+    assert shapes["fit"] <= shapes["profile"] <= shapes["diagnose"]

@@ -90,7 +90,8 @@ def test_band_paths_are_the_ones_the_fmu_declares(tractor_fmu, monkeypatch):
     outputs = dict(problem.model.outputs)
     outputs["x_tc"] = dataclasses.replace(outputs["x_tc"], unit="km")
     outputs["y_tc"] = dataclasses.replace(outputs["y_tc"], unit=None)
-    monkeypatch.setattr(problem, "model", SimpleNamespace(outputs=outputs))
+    model = SimpleNamespace(outputs=outputs, annotation=problem.model.annotation)
+    monkeypatch.setattr(problem, "model", model)
     assert trajectory_band(problem, _profile_result(problem), n=1).paths[0].units == ("km", "")
     x, y = paths.estimate["tractor CG"]
     assert x.shape == y.shape == problem.experiments[0].time.shape

@@ -17,7 +17,6 @@ import json
 import time
 import fmuid
 from fmuid.data import load_experiment, load_spec
-from fmuid.discrepancy import DiagnoseOptions
 from fmuid.experiment_design import space_from_json
 
 with open("runs.txt", "a") as runs:
@@ -41,7 +40,7 @@ CALLS = {
     "profile": 'fmuid.profile({fmu!r}, [load_experiment("d.csv")], load_spec("s.json"), '
     "workers=2, progress=progress)",
     "diagnose": 'fmuid.diagnose({fmu!r}, [load_experiment("d.csv")], load_spec("s.json"), '
-    "options=DiagnoseOptions(workers=2))",
+    "workers=2)",
     "design": 'fmuid.design("msd", load_spec("s.json"), '
     'space_from_json(open("space.json").read()), workers=2)',
 }

@@ -2,13 +2,14 @@
 
 **One family, one level.** ``mismatch`` is decided by a weighted Holm procedure (valid under
 any dependence) over four groups of tests at the family-wise false-alarm level fixed in
-advance (1 %): the catalogue scan (weight :data:`SCAN_WEIGHT`), the generic error-model test
-(:data:`GENERIC_WEIGHT`, :mod:`.generic`: concealed effects outside the catalogue), the
-agreement of separate per-experiment fits (:data:`AGREEMENT_WEIGHT`) and the residual tests,
-which share the rest equally. The weights put the false-alarm budget where a concealed effect
-leaves its evidence (the likelihood ratio of the right augmentation, or input-driven structure
-that no move of the parameters reproduces); an effect that shows in the residuals leaves
-p-values far below any of these levels.
+advance (0.5 %, :data:`~.residual_tests.FALSE_ALARM`): the catalogue scan (weight
+:data:`SCAN_WEIGHT`), the generic error-model test (:data:`GENERIC_WEIGHT`, :mod:`.generic`:
+concealed effects outside the catalogue), the agreement of separate per-experiment fits
+(:data:`AGREEMENT_WEIGHT`) and the residual tests, which share the rest equally. The weights
+put the false-alarm budget where a concealed effect leaves its evidence (the likelihood ratio
+of the right augmentation, or input-driven structure that no move of the parameters
+reproduces); an effect that shows in the residuals leaves p-values far below any of these
+levels.
 
 **The scan's null distribution.** Each candidate's likelihood-ratio statistic has, under the
 base model, the null of :func:`~.scan.null_p_value` (chi-bar-square at a bound). The scan's

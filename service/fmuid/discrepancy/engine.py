@@ -7,7 +7,7 @@
    effect leaves the residuals looking like noise. The base fit is re-checked from the best
    candidate's base parameters (a lower base optimum would otherwise pass for an effect).
 3. **Decide** (:mod:`.decide`): one weighted Holm family at the false-alarm level fixed in
-   advance (1 %) over the scan (min-P over the candidates, boundary-aware nulls), the
+   advance (0.5 %) over the scan (min-P over the candidates, boundary-aware nulls), the
    agreement test and the residual tests. A candidate is named when it is significant after the
    scan's adjustment and the augmented model's residuals pass; candidates that explain the
    data equally well are listed (Vuong's test, or equal predictions).
@@ -270,19 +270,21 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     run.report("tests of the augmented model")
     # 5. profile the added parameters, then the original ones before and after
     added = [p for c in applied for p in c.parameters]
+    before = run.track(aug)
     prof = profile_problem(
         aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk,
         confidence=opts.ci_confidence, executor=run.executor,
     )  # fmt: skip
-    run.profiled(aug, prof.cost.simulations - final_fit.cost.simulations)
+    run.profiled(before, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
     estimates = added_estimates(prof, added, opts.ci_confidence)
     run.report("profiles of the added parameters")
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:
         at_study = augmented(problem, applied)
+        before = run.track(at_study)
         absorbed_by, sims = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
-        run.profiled(at_study, sims)
+        run.profiled(before, sims)
         run.report("profiles of the original parameters before and after")
     common["location"] = {
         **locate.effect_location(

@@ -101,11 +101,18 @@ class Run:
         )  # fmt: skip
         return fits, decide.min_p(fits, self.problem.spec.seed + stage)
 
-    def profiled(self, problem: Problem, spent_elsewhere: int) -> None:
-        """Count a profile: its problem's simulations, and those of worker processes."""
+    def track(self, problem: Problem) -> int:
+        """Count ``problem``'s simulations from now on; return :meth:`spent` so far."""
         self.made[id(problem)] = problem
-        if self.opts.workers != 1 or self.executor is not None:
-            self.extra += spent_elsewhere
+        return self.spent()
+
+    def profiled(self, before: int, total: int) -> None:
+        """Count the simulations of profiles that cost ``total`` since :meth:`spent` was ``before``.
+
+        What this process simulated is counted by the problems already; the rest ran in worker
+        processes or on dask workers.
+        """
+        self.extra += max(total - (self.spent() - before), 0)
 
     def cost(self) -> Cost:
         """Return the simulations and seconds spent."""
@@ -115,6 +122,7 @@ class Run:
 def tie_intervals(run: Run, tie: CandidateFit) -> dict[str, object]:
     """Profile-likelihood intervals of an equally good candidate's added parameters."""
     tie_fit = fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
+    before = run.track(tie.problem)
     prof = profile_problem(
         tie.problem,
         tie_fit,
@@ -124,7 +132,7 @@ def tie_intervals(run: Run, tie: CandidateFit) -> dict[str, object]:
         options=run.opts.walk,
         confidence=run.opts.ci_confidence,
     )
-    run.profiled(tie.problem, prof.cost.simulations - tie_fit.cost.simulations)
+    run.profiled(before, prof.cost.simulations - tie_fit.cost.simulations)
     estimates = added_estimates(prof, tie.candidate.parameters, run.opts.ci_confidence)
     return {name: e.to_dict() for name, e in estimates.items()}
 
