@@ -76,8 +76,7 @@ CREATE TABLE IF NOT EXISTS lease (
 """
 
 _ADDED = {"progress_detail": "TEXT NOT NULL DEFAULT ''", "space": "TEXT"}
-"""Columns added to the jobs table since its first version (a design stored before ``space``
-keeps its space as its one dataset, which :mod:`fmuid.jobs.kinds` reads)."""
+"""Columns added since the first version (designs stored before ``space`` keep it as a dataset)."""
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -155,11 +154,9 @@ class JobStore:
         """Give a store made by an earlier version the columns added since (:data:`_ADDED`)."""
         conn = self._connection()
         columns = {row[1] for row in conn.execute("PRAGMA table_info(jobs)")}
-        for name, declaration in _ADDED.items():
-            if name in columns:
-                continue
+        for name in [name for name in _ADDED if name not in columns]:
             try:
-                conn.execute(f"ALTER TABLE jobs ADD COLUMN {name} {declaration}")
+                conn.execute(f"ALTER TABLE jobs ADD COLUMN {name} {_ADDED[name]}")
             except sqlite3.OperationalError as exc:  # another process added it meanwhile
                 if "duplicate column" not in str(exc):
                     raise
