@@ -180,13 +180,15 @@ def _profile(inputs: JobInputs, context: RunContext) -> Any:
 def _diagnose(inputs: JobInputs, context: RunContext) -> Any:
     import fmuid
 
-    return fmuid.diagnose(
-        inputs.fmu,
-        inputs.experiments,
-        inputs.spec,
-        progress=context.progress,
-        test_data=inputs.test_data,
-    )
+    with context.executor() as executor:
+        return fmuid.diagnose(
+            inputs.fmu,
+            inputs.experiments,
+            inputs.spec,
+            progress=context.progress,
+            test_data=inputs.test_data,
+            executor=executor,
+        )
 
 
 def _design(inputs: JobInputs, context: RunContext) -> Any:
