@@ -224,7 +224,7 @@ def fit(
         "interface": spec.interface,
         "test_data": [e.name for e in test_data],
     }
-    return provenance.record(
+    recorded = provenance.record(
         _validated(problem, result, test_data),
         fmu_sha256=problem.model.sha256,
         spec=spec,
@@ -232,6 +232,7 @@ def fit(
         options=options,
         started=started,
     )
+    return replace(recorded, problem=problem)
 
 
 def profile(
@@ -295,7 +296,7 @@ def profile(
     result = profile_problem(problem, fit, workers=workers, executor=executor, progress=progress)
     if test_data:
         result = replace(result, fit=_validated(problem, result.fit, test_data))
-    return provenance.record(
+    recorded = provenance.record(
         result,
         fmu_sha256=problem.model.sha256,
         spec=spec,
@@ -303,6 +304,7 @@ def profile(
         options=options,
         started=started,
     )
+    return replace(recorded, problem=problem)
 
 
 def _check_test_data(problem: Problem, test_data: Sequence[Experiment]) -> None:

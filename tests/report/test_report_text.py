@@ -10,6 +10,7 @@ every figure (titles, labels, tick labels, legends) from matplotlib after drawin
 import html
 import json
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -113,6 +114,12 @@ def test_fit_and_profile_reports_read_cleanly(msd_fmu, tmp_path, figure_texts):
     fit = write_report(result.fit, tmp_path / "fit", **problem_inputs)
     profile = write_report(result, tmp_path / "profile", **problem_inputs)
     check([fit, profile], figure_texts, tmp_path)
+    # the result carries its problem: the same figures without the inputs, fewer without it
+    carried = write_report(result, tmp_path / "carried").parent
+    bare = write_report(replace(result, problem=None), tmp_path / "bare").parent
+    figures = sorted(f.name for f in (tmp_path / "profile").glob("*.png"))
+    assert sorted(f.name for f in carried.glob("*.png")) == figures
+    assert len(list(bare.glob("*.png"))) < len(figures)
 
 
 @pytest.mark.slow
@@ -121,9 +128,7 @@ def test_diagnose_reports_read_cleanly(msd_fmu, tmp_path, figure_texts, lag):
     experiments, spec = _study(msd_fmu, lag=lag)
     diagnosis = fmuid.diagnose(msd_fmu, experiments, spec)
     assert diagnosis.mismatch == (lag is not None)
-    index = write_report(
-        diagnosis, tmp_path / "diagnose", fmu=msd_fmu, experiments=experiments, spec=spec
-    )
+    index = write_report(diagnosis, tmp_path / "diagnose")  # the problem it carries
     text = index.read_text(encoding="utf-8")
     if lag is None:  # only what applies: no location, no before/after
         assert "Location of the mismatch" not in text and "augmented" not in text

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.residual_tests import TestResult, Window
 from fmuid.estimation.result import SCHEMA_VERSION, Cost
 from fmuid.provenance import Provenance, entry
 from fmuid.readable import p_text
+
+if TYPE_CHECKING:
+    from fmuid.estimation.problem import Problem
 
 
 @dataclass(frozen=True)
@@ -207,6 +210,9 @@ class Diagnosis:
     effects: tuple[EffectStep, ...] = ()
     validation: tuple[dict[str, Any], ...] = ()
     provenance: Provenance | None = None
+    problem: Problem | None = field(default=None, repr=False, compare=False)
+    """The problem the stage computed it on (set by ``fmuid.fit``, ``profile``, ``diagnose``;
+    not written to the JSON): ``write_report(result, folder)`` needs nothing else."""
 
     def whiteness(self, after: bool) -> dict[str, float]:
         """Ljung-Box p-value per ``experiment/output``, before or after the augmentation."""

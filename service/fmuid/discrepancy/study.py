@@ -95,7 +95,7 @@ def diagnose(
         executor=executor,
     )
     held = [e.name for e in test_data]
-    return provenance.record(
+    recorded = provenance.record(
         result,
         fmu_sha256=problem.model.sha256,
         spec=spec,
@@ -103,6 +103,7 @@ def diagnose(
         options={"stage": "diagnose", **_options(options), "test_data": held},
         started=started,
     )
+    return replace(recorded, problem=problem)
 
 
 def _options(options: DiagnoseOptions) -> dict[str, object]:

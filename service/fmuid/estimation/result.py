@@ -11,6 +11,7 @@ from fmuid.estimation.space import ParameterSpace
 from fmuid.provenance import Provenance, entry
 
 if TYPE_CHECKING:
+    from fmuid.estimation.problem import Problem
     from fmuid.estimation.validation import ValidationEntry
 
 SCHEMA_VERSION = 1
@@ -97,6 +98,9 @@ class FitResult:
     units: dict[str, str] = field(default_factory=dict)
     provenance: Provenance | None = None
     validation: tuple[ValidationEntry, ...] = ()
+    problem: Problem | None = field(default=None, repr=False, compare=False)
+    """The problem the stage computed it on (set by ``fmuid.fit``, ``profile``, ``diagnose``;
+    not written to the JSON): ``write_report(result, folder)`` needs nothing else."""
 
     @property
     def space(self) -> ParameterSpace:

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fmuid.estimation.result import SCHEMA_VERSION, Cost, FitResult
 from fmuid.provenance import Provenance, entry
+
+if TYPE_CHECKING:
+    from fmuid.estimation.problem import Problem
 
 IDENTIFIABLE = "identifiable"
 PRACTICALLY_NON_IDENTIFIABLE = "practically_non_identifiable"
@@ -171,6 +174,9 @@ class ProfileResult:
     extra: dict[str, Any] = field(default_factory=dict)
     checks: dict[str, Any] = field(default_factory=dict)
     provenance: Provenance | None = None
+    problem: Problem | None = field(default=None, repr=False, compare=False)
+    """The problem the stage computed it on (set by ``fmuid.fit``, ``profile``, ``diagnose``;
+    not written to the JSON): ``write_report(result, folder)`` needs nothing else."""
 
     @property
     def chi2(self) -> float:

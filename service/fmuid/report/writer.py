@@ -64,7 +64,8 @@ def write_report(
         draws a stored result): it is built from them once, here.
     problem
         The fitting problem the engine computed the result on (``fmuid.stages.make_problem``);
-        hand it on when you have it, so that nothing (FMU, sigma estimate) is derived again.
+        by default the one the result carries (``fmuid.fit``, ``profile`` and ``diagnose`` set
+        it), so that nothing (FMU, sigma estimate) is derived again.
     extra_figures
         More figures to append, by caption.
 
@@ -80,6 +81,7 @@ def write_report(
         from fmuid.report.design import write_design_report
 
         return write_design_report(result, Path(directory))
+    problem = problem or getattr(result, "problem", None)
     if problem is None and fmu is not None and experiments is not None and spec is not None:
         from fmuid.estimation.problem import Problem
 
