@@ -71,9 +71,12 @@ def recheck(tractor_fmu: Path, made: cc.ConcealedCase, added: str, bounds: tuple
         start=case.magnitude, lower=bounds[0], upper=bounds[1], scale="lin"
     )
     wrapped = Problem(
-        tractor_fmu, case.experiments, spec, predictor=WrappedFmu(tractor_fmu, added),
+        tractor_fmu,
+        case.experiments,
+        spec,
+        predictor=WrappedFmu(tractor_fmu, added),
         parameters=params,
-    )  # fmt: skip
+    )
     aug = fit_problem(wrapped, start={**fit.estimates, added: case.magnitude}, global_search=False)
     return [ljung_box_p(part) for part in np.split(r, splits)], fit.chi2, (lo, hi), aug
 

@@ -23,10 +23,20 @@ from fmuid.stages import make_problem
 from operational import study_spec
 
 CONTRACT = {
-    "mismatch", "evidence", "location", "effect", "description", "candidates",
-    "added_parameters", "chi2_before", "chi2_after", "parameters", "indistinguishable",
-    "generic_correction", "absorbed",
-}  # fmt: skip
+    "mismatch",
+    "evidence",
+    "location",
+    "effect",
+    "description",
+    "candidates",
+    "added_parameters",
+    "chi2_before",
+    "chi2_after",
+    "parameters",
+    "indistinguishable",
+    "generic_correction",
+    "absorbed",
+}
 
 
 def _ljung_box_p(r: np.ndarray) -> float:
@@ -66,9 +76,14 @@ def test_control_raises_no_false_alarm(tractor_fmu: Path) -> None:
     assert set(result["parameters"]) == set(ft.BOUNDS)
     # the catalogue was scanned all the same, and found nothing at the 1 % level
     assert {c["effect"] for c in result["candidates"]} >= {
-        "output_lag", "input_delay", "input_lag", "input_offset", "output_bias",
-        "tire_saturation", "side_slope",
-    }  # fmt: skip
+        "output_lag",
+        "input_delay",
+        "input_lag",
+        "input_offset",
+        "output_bias",
+        "tire_saturation",
+        "side_slope",
+    }
     assert result["scan_p_value"] > 0.01
     assert result["verdict"].startswith("No mismatch")
 
@@ -125,8 +140,9 @@ def test_a_input_lag_and_the_same_lag_on_both_outputs_are_a_tie_no_test_settles(
     tractor_fmu: Path,
 ) -> None:
     case = ft.make_case("input_lag", 0.05, seed=6, rate=5.0)
-    result = diagnose(tractor_fmu, case.experiments, study_spec(), options=DiagnoseOptions(
-        absorbed=False)).to_dict()  # fmt: skip
+    result = diagnose(
+        tractor_fmu, case.experiments, study_spec(), options=DiagnoseOptions(absorbed=False)
+    ).to_dict()
     pair = {"input_lag", "output_lag"}
     assert result["effect"] in pair
     (other,) = pair - {result["effect"]}
@@ -146,8 +162,9 @@ def test_a_concealed_effect_outside_the_catalogue_is_flagged_and_left_unexplaine
     tractor_fmu: Path,
 ) -> None:
     case = ft.make_case("hitch_stiffness", 4000.0, seed=3, rate=5.0)
-    result = diagnose(tractor_fmu, case.experiments, study_spec(), options=DiagnoseOptions(
-        absorbed=False)).to_dict()  # fmt: skip
+    result = diagnose(
+        tractor_fmu, case.experiments, study_spec(), options=DiagnoseOptions(absorbed=False)
+    ).to_dict()
     _assert_concealed(tractor_fmu, case, result)
     assert result["mismatch"] is True
     assert "generic_error_model" in {e["test"] for e in result["evidence"]}

@@ -50,18 +50,33 @@ def u(t: float) -> float:
 @pytest.mark.parametrize(
     ("effects", "values", "force"),
     [
-        ((fx.InputOffset("f", _p("o")), fx.InputGain("f", _p("g"))), {"o": 0.3, "g": 1.2},
-         lambda t, x, v: 1.2 * (u(t) + 0.3)),
-        ((fx.InputSaturation("f", _p("s")),), {"s": 1.0},
-         lambda t, x, v: float(np.clip(u(t), -1.0, 1.0))),
-        ((fx.InputDeadZone("f", _p("d")),), {"d": 0.5},
-         lambda t, x, v: u(t) - float(np.clip(u(t), -0.5, 0.5))),
-        ((fx.FeedbackPolynomial("f", _p("c"), source="x", power=3),), {"c": -6.0},
-         lambda t, x, v: u(t) - 6.0 * x**3),
-        ((fx.FeedbackFriction("f", _p("c"), source="v", width=0.05),), {"c": 0.4},
-         lambda t, x, v: u(t) - 0.4 * np.tanh(v / 0.05)),
+        (
+            (fx.InputOffset("f", _p("o")), fx.InputGain("f", _p("g"))),
+            {"o": 0.3, "g": 1.2},
+            lambda t, x, v: 1.2 * (u(t) + 0.3),
+        ),
+        (
+            (fx.InputSaturation("f", _p("s")),),
+            {"s": 1.0},
+            lambda t, x, v: float(np.clip(u(t), -1.0, 1.0)),
+        ),
+        (
+            (fx.InputDeadZone("f", _p("d")),),
+            {"d": 0.5},
+            lambda t, x, v: u(t) - float(np.clip(u(t), -0.5, 0.5)),
+        ),
+        (
+            (fx.FeedbackPolynomial("f", _p("c"), source="x", power=3),),
+            {"c": -6.0},
+            lambda t, x, v: u(t) - 6.0 * x**3,
+        ),
+        (
+            (fx.FeedbackFriction("f", _p("c"), source="v", width=0.05),),
+            {"c": 0.4},
+            lambda t, x, v: u(t) - 0.4 * np.tanh(v / 0.05),
+        ),
     ],
-)  # fmt: skip
+)
 def test_input_and_feedback_effects_match_the_augmented_ode(
     msd_fmu: Path, effects: tuple[fx.Effect, ...], values: dict[str, float], force: object
 ) -> None:
@@ -74,9 +89,11 @@ def test_input_and_feedback_effects_match_the_augmented_ode(
 def test_output_lag_bias_gain_and_saturation_act_on_the_recording(msd_fmu: Path) -> None:
     lagged = _msd(lambda t, x, v: u(t), extra_state=True, tau=0.3)
     effects = (
-        fx.OutputLag("", _p("tau")), fx.OutputGain("x", _p("g")), fx.OutputBias("x", _p("b")),
+        fx.OutputLag("", _p("tau")),
+        fx.OutputGain("x", _p("g")),
+        fx.OutputBias("x", _p("b")),
         fx.OutputSaturation("x", _p("top"), upper=True),
-    )  # fmt: skip
+    )
     got = _predict(msd_fmu, effects, {"tau": 0.3, "g": 0.9, "b": 0.01, "top": 0.2})
     expected = np.minimum(0.9 * lagged + 0.01, 0.2)
     assert np.max(np.abs(got - expected)) < 1e-4 * np.max(np.abs(expected))

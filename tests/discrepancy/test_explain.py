@@ -60,18 +60,32 @@ def test_a_generic_error_model_that_fits_as_well_is_said() -> None:
     text = explain.explained([named], 40.0, 20.0, 1e-5, [], True, rival)
     assert "outside the catalogue (Laguerre filters) explains the data as well" in text
     assert "Vuong p = 0.65" in text
-    doc = {"mismatch": True, "effect": "tire_saturation", "lrt_p_value": 1e-5,
-           "indistinguishable": [rival], "effects": [{"effect": "tire_saturation"}]}  # fmt: skip
+    doc = {
+        "mismatch": True,
+        "effect": "tire_saturation",
+        "lrt_p_value": 1e-5,
+        "indistinguishable": [rival],
+        "effects": [{"effect": "tire_saturation"}],
+    }
     assert verdict(doc).startswith("Physics outside the catalogue explains the mismatch as well")
 
 
 def test_several_effects_and_held_out_errors_are_in_the_verdict() -> None:
     doc = {
-        "mismatch": True, "effect": "steer_offset", "lrt_p_value": 1e-9,
+        "mismatch": True,
+        "effect": "steer_offset",
+        "lrt_p_value": 1e-9,
         "effects": [{"effect": "steer_offset"}, {"effect": "feedback_polynomial"}],
-        "validation": [{"experiment": "test.csv", "output": "x", "rms_base": 0.0071,
-                        "rms_final": 0.00098, "rms_by_step": [0.0069, 0.00098]}],
-    }  # fmt: skip
+        "validation": [
+            {
+                "experiment": "test.csv",
+                "output": "x",
+                "rms_base": 0.0071,
+                "rms_final": 0.00098,
+                "rms_by_step": [0.0069, 0.00098],
+            }
+        ],
+    }
     text = verdict(doc)
     assert text.startswith("input_offset, then feedback_polynomial explain the mismatch")
     assert "held-out RMS simulation error x 0.0071 -> 0.00098 (test.csv)" in text

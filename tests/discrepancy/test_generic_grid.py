@@ -29,8 +29,15 @@ def test_filters_on_a_jittered_grid_with_a_repeated_row_match_the_ode() -> None:
         v = u[k + 1] if h == 0 else u[k] + (u[k + 1] - u[k]) * (t - time[k]) / h
         return [s[1], v - 3.0 * s[1] - 4.0 * s[0]]
 
-    sol = solve_ivp(rhs, (time[0], time[-1]), [0.0, 0.0], t_eval=np.unique(time), rtol=1e-10,
-                    atol=1e-12, max_step=0.005)  # fmt: skip
+    sol = solve_ivp(
+        rhs,
+        (time[0], time[-1]),
+        [0.0, 0.0],
+        t_eval=np.unique(time),
+        rtol=1e-10,
+        atol=1e-12,
+        max_step=0.005,
+    )
     expected = 2.0 * sol.y[1] + sol.y[0]  # y = (2 s + 1) x for x'' + 3 x' + 4 x = u
     got = filtered(num, den, u, time)
     assert got[50] == got[51]  # a strictly proper filter: no jump at the repeated row
@@ -43,8 +50,9 @@ def test_equal_steps_go_through_lsim_and_agree_with_the_recursion() -> None:
     num, den = np.array([1.0]), np.array([1.0, 2.0])
     jitter = time.copy()
     jitter[1:-1] += 1e-7 * np.sin(np.arange(99))
-    np.testing.assert_allclose(filtered(num, den, u, time), filtered(num, den, u, jitter),
-                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        filtered(num, den, u, time), filtered(num, den, u, jitter), atol=1e-6
+    )
 
 
 @pytest.mark.slow

@@ -46,13 +46,21 @@ def test_an_fmu_without_annotation_gets_generic_effects_named_by_its_variables(
     problem = make_problem(msd_fmu, [exp], spec)
     effects = catalogue(problem, knowledge, {"k": 4.0})
     assert {e.label for e in effects} == {
-        "input_offset(offset_f)", "input_gain(gain_f)", "input_lag(tau_f)",
-        "input_delay(delay_f)", "input_dead_zone(dead_f)", "input_saturation(limit_f)",
-        "output_lag(tau_outputs)", "output_gain(gain_x)", "output_bias(bias_x)",
-        "output_saturation(max_x)", "output_saturation(min_x)",
-        "feedback_polynomial(c2_x_f)", "feedback_polynomial(c3_x_f)",
+        "input_offset(offset_f)",
+        "input_gain(gain_f)",
+        "input_lag(tau_f)",
+        "input_delay(delay_f)",
+        "input_dead_zone(dead_f)",
+        "input_saturation(limit_f)",
+        "output_lag(tau_outputs)",
+        "output_gain(gain_x)",
+        "output_bias(bias_x)",
+        "output_saturation(max_x)",
+        "output_saturation(min_x)",
+        "feedback_polynomial(c2_x_f)",
+        "feedback_polynomial(c3_x_f)",
         "feedback_friction(coulomb_v_f)",
-    }  # fmt: skip
+    }
     values = {p.name: p.spec.upper / 2 for e in effects for p in e.parameters}
     text = " ".join(e.sentence(values) for e in effects)
     assert "steer" not in text and "gyro" not in text

@@ -8,15 +8,35 @@ from pathlib import Path
 from fmuid.results import load_result
 
 OLD = {
-    "mismatch": True, "effect": "sensor_lag", "description": "...", "chi2_before": 640.2,
-    "chi2_after": 101.0, "lrt_p_value": 1e-12, "second_effect": "steer_offset",
-    "candidates": [{"effect": "gyro_bias", "parameters": {"bias_gam_t": 0.1}, "chi2": 90.0,
-                    "p_value": 0.1, "bic": 95.0}],
-    "added_parameters": {"tau_sensor": {"estimate": 0.12, "ci": [0.1, 0.14], "confidence": 0.95,
-                                        "unit": "s", "off": 0.0, "excludes_off": True}},
+    "mismatch": True,
+    "effect": "sensor_lag",
+    "description": "...",
+    "chi2_before": 640.2,
+    "chi2_after": 101.0,
+    "lrt_p_value": 1e-12,
+    "second_effect": "steer_offset",
+    "candidates": [
+        {
+            "effect": "gyro_bias",
+            "parameters": {"bias_gam_t": 0.1},
+            "chi2": 90.0,
+            "p_value": 0.1,
+            "bic": 95.0,
+        }
+    ],
+    "added_parameters": {
+        "tau_sensor": {
+            "estimate": 0.12,
+            "ci": [0.1, 0.14],
+            "confidence": 0.95,
+            "unit": "s",
+            "off": 0.0,
+            "excludes_off": True,
+        }
+    },
     "parameters": {"C_atf": {"before": 1.8e5, "after": 2.2e5}},
     "indistinguishable": [{"effect": "steering_lag", "parameters": {"tau_steer": 0.1}}],
-}  # fmt: skip
+}
 
 
 def test_old_names_read_as_todays(tmp_path: Path) -> None:

@@ -23,8 +23,7 @@ def _offset_record():  # type: ignore[no-untyped-def]
     def rhs(tt: float, s: np.ndarray) -> list[float]:
         return [s[1], (np.interp(tt, t, u) + OFFSET - B * s[1] - K * s[0]) / M]
 
-    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12,
-                    max_step=0.01)  # fmt: skip
+    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12, max_step=0.01)
     return experiment_from_arrays(
         "offset.csv", t, {"f": u, "x": sol.y[0] + rng.normal(0, SIGMA, t.size)}
     )

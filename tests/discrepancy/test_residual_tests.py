@@ -68,9 +68,12 @@ def test_input_cross_correlation_detects_an_input_driven_error() -> None:
     rng = np.random.default_rng(2)
     clean = _series(rng.normal(size=150))
     driven = rt.Series(
-        clean.experiment, clean.output, clean.time,
-        clean.residuals + 60 * np.roll(clean.inputs["delta"], 3), clean.inputs,
-    )  # fmt: skip
+        clean.experiment,
+        clean.output,
+        clean.time,
+        clean.residuals + 60 * np.roll(clean.inputs["delta"], 3),
+        clean.inputs,
+    )
     assert rt.input_cross_correlation(driven)[0].p_value < 1e-6
 
 
@@ -79,16 +82,26 @@ def test_first_order_lag_is_exact_for_piecewise_linear_input() -> None:
     u = np.array([0.0, 1.0, -0.5, 0.2, 0.2, 2.0])
     tau = 0.17
     sol = solve_ivp(
-        lambda s, y: (np.interp(s, t, u) - y) / tau, (0, 2.5), [0.0], t_eval=t,
-        rtol=1e-11, atol=1e-13, max_step=0.01,
-    )  # fmt: skip
+        lambda s, y: (np.interp(s, t, u) - y) / tau,
+        (0, 2.5),
+        [0.0],
+        t_eval=t,
+        rtol=1e-11,
+        atol=1e-13,
+        max_step=0.01,
+    )
     np.testing.assert_allclose(first_order_lag(t, u, tau), sol.y[0], atol=1e-8)
     grid = np.linspace(0, 2.5, 126)
     ug = np.interp(grid, t, u)
     sol = solve_ivp(
-        lambda s, y: (np.interp(s, grid, ug) - y) / tau, (0, 2.5), [0.0], t_eval=grid,
-        rtol=1e-11, atol=1e-13, max_step=0.005,
-    )  # fmt: skip
+        lambda s, y: (np.interp(s, grid, ug) - y) / tau,
+        (0, 2.5),
+        [0.0],
+        t_eval=grid,
+        rtol=1e-11,
+        atol=1e-13,
+        max_step=0.005,
+    )
     np.testing.assert_allclose(first_order_lag(grid, ug, tau), sol.y[0], atol=1e-8)
 
 

@@ -29,8 +29,7 @@ def _record(name: str, seed: int):  # type: ignore[no-untyped-def]
         x, v = s
         return [v, (np.interp(tt, t, u) + OFFSET + CUBIC * x**3 - B * v - K * x) / M]
 
-    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12,
-                    max_step=0.01)  # fmt: skip
+    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12, max_step=0.01)
     x = sol.y[0] + rng.normal(0.0, SIGMA, t.size)
     return experiment_from_arrays(name, t, {"f": u, "x": x})
 

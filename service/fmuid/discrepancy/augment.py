@@ -133,9 +133,13 @@ class AugmentedPredictor:
             self._fine(experiment) if lags else (experiment.time, np.arange(len(experiment.time)))
         )
         y = get_simulator(self.base.model).simulate(
-            {**self.base.fixed, **fmu_params}, input_time, inputs, out_time, list(outputs),
+            {**self.base.fixed, **fmu_params},
+            input_time,
+            inputs,
+            out_time,
+            list(outputs),
             feedback=feedback,
-        )  # fmt: skip
+        )
         y = np.array(y, dtype=float)
         names = list(outputs)
         for lag in lags:

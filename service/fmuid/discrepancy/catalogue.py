@@ -106,8 +106,9 @@ def _time_constant(name: str, meaning: str, s: Signals) -> AddedParameter:
     points = min(int(2 * decades) + 2, 10)
     grid = tuple(np.logspace(np.log10(lower), np.log10(upper), points).tolist())
     start = float(np.sqrt(lower * upper))
-    return AddedParameter(name, "s", meaning, _spec(start, lower, upper, "log"), 0.0, "low",
-                          probe=lower, grid=grid)  # fmt: skip
+    return AddedParameter(
+        name, "s", meaning, _spec(start, lower, upper, "log"), 0.0, "low", probe=lower, grid=grid
+    )
 
 
 def _signed(name: str, unit: str, meaning: str, bound: float) -> AddedParameter:
@@ -122,8 +123,16 @@ def _nonlinear(name: str, unit: str, meaning: str, bound: float) -> AddedParamet
     """
     steps = [f * bound for f in SPREAD]
     grid = tuple(sorted([*steps, *(-v for v in steps)]))
-    return AddedParameter(name, unit, meaning, _spec(0.0, -bound, bound, "lin"), 0.0, "inside",
-                          probe=0.01 * bound, grid=grid)  # fmt: skip
+    return AddedParameter(
+        name,
+        unit,
+        meaning,
+        _spec(0.0, -bound, bound, "lin"),
+        0.0,
+        "inside",
+        probe=0.01 * bound,
+        grid=grid,
+    )
 
 
 def _gain(name: str, meaning: str) -> AddedParameter:
@@ -159,16 +168,28 @@ def _input_effects(name: str, unit: str, s: Signals, w: fx.Words) -> list[fx.Eff
     dead = _quantiles(size, (0.05, 0.1, 0.2, 0.3, 0.45, 0.6))
     if dead[-1] > 0:
         p = AddedParameter(
-            f"dead_{name}", unit, f"dead zone of {what}", _spec(0.0, 0.0, dead[-1], "lin"),
-            0.0, "low", probe=dead[2], grid=dead,
-        )  # fmt: skip
+            f"dead_{name}",
+            unit,
+            f"dead zone of {what}",
+            _spec(0.0, 0.0, dead[-1], "lin"),
+            0.0,
+            "low",
+            probe=dead[2],
+            grid=dead,
+        )
         out.append(fx.InputDeadZone(name, (p,), w))
     limits = _quantiles(size, levels(size.size))
     if limits[0] < top:
         p = AddedParameter(
-            f"limit_{name}", unit, f"saturation of {what}", _spec(top, limits[0], top, "lin"),
-            top, "high", probe=limits[len(LEVELS) - 2], grid=limits,
-        )  # fmt: skip
+            f"limit_{name}",
+            unit,
+            f"saturation of {what}",
+            _spec(top, limits[0], top, "lin"),
+            top,
+            "high",
+            probe=limits[len(LEVELS) - 2],
+            grid=limits,
+        )
         out.append(fx.InputSaturation(name, (p,), w))
     return out
 
@@ -186,16 +207,28 @@ def _output_effects(name: str, unit: str, s: Signals, w: fx.Words) -> list[fx.Ef
         high = _quantiles(y, levels(y.size))
         upper = float(np.max(y)) + span / 4
         p = AddedParameter(
-            f"max_{name}", unit, f"upper limit of {what}", _spec(upper, high[0], upper, "lin"),
-            upper, "high", probe=high[len(LEVELS) - 2], grid=(*high, float(np.max(y))),
-        )  # fmt: skip
+            f"max_{name}",
+            unit,
+            f"upper limit of {what}",
+            _spec(upper, high[0], upper, "lin"),
+            upper,
+            "high",
+            probe=high[len(LEVELS) - 2],
+            grid=(*high, float(np.max(y))),
+        )
         out.append(fx.OutputSaturation(name, (p,), w, upper=True))
         low = _quantiles(y, tuple(1 - q for q in levels(y.size)))
         lower = float(np.min(y)) - span / 4
         p = AddedParameter(
-            f"min_{name}", unit, f"lower limit of {what}", _spec(lower, lower, low[0], "lin"),
-            lower, "low", probe=low[len(LEVELS) - 2], grid=(*low, float(np.min(y))),
-        )  # fmt: skip
+            f"min_{name}",
+            unit,
+            f"lower limit of {what}",
+            _spec(lower, lower, low[0], "lin"),
+            lower,
+            "low",
+            probe=low[len(LEVELS) - 2],
+            grid=(*low, float(np.min(y))),
+        )
         out.append(fx.OutputSaturation(name, (p,), w, upper=False))
     return out
 
@@ -204,9 +237,10 @@ def _feedback_effects(
     problem: Problem, s: Signals, w: fx.Words, rate_of: Mapping[str, tuple[str, bool]]
 ) -> list[fx.Effect]:
     targets = [
-        n for n, v in problem.model.inputs.items()
+        n
+        for n, v in problem.model.inputs.items()
         if v.is_continuous and (n in problem.inputs or n in s.undriven)
-    ]  # fmt: skip
+    ]
     out: list[fx.Effect] = []
     for u in targets:
         u_size = s.size(u)
@@ -308,9 +342,12 @@ def undriven_sizes(problem: Problem, values: Mapping[str, float]) -> dict[str, f
     out = {}
     for name in undriven:
         pushed = get_simulator(problem.model).simulate(
-            params, input_time, {**inputs, name: np.ones(len(input_time))}, exp.time,
+            params,
+            input_time,
+            {**inputs, name: np.ones(len(input_time))},
+            exp.time,
             problem.outputs,
-        )  # fmt: skip
+        )
         problem.simulations += 2
         ratios = []
         for j in range(len(problem.outputs)):

@@ -132,13 +132,23 @@ def _lead(series: Sequence[Series], max_lag_s: float = 2.0) -> dict[str, Any] | 
             lags = range(-int(max_lag_s / dt), int(max_lag_s / dt) + 1)
             ra, rb = a.residuals - a.residuals.mean(), b.residuals - b.residuals.mean()
             norm = float(np.linalg.norm(ra) * np.linalg.norm(rb)) or 1.0
-            corr = {k: float(ra[max(0, -k) : len(ra) - max(0, k)] @ rb[max(0, k) :
-                    len(rb) - max(0, -k)]) / norm for k in lags}  # fmt: skip
+            corr = {
+                k: float(
+                    ra[max(0, -k) : len(ra) - max(0, k)] @ rb[max(0, k) : len(rb) - max(0, -k)]
+                )
+                / norm
+                for k in lags
+            }
             k = max(corr, key=lambda j: abs(corr[j]))
             if k != 0 and (best is None or abs(corr[k]) > best["correlation"]):
                 leader, other = (a.output, b.output) if k > 0 else (b.output, a.output)
-                best = {"output": leader, "other": other, "seconds": abs(k) * dt,
-                        "correlation": abs(corr[k]), "experiment": a.experiment}  # fmt: skip
+                best = {
+                    "output": leader,
+                    "other": other,
+                    "seconds": abs(k) * dt,
+                    "correlation": abs(corr[k]),
+                    "experiment": a.experiment,
+                }
     return best
 
 

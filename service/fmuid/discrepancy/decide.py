@@ -222,10 +222,15 @@ def generic_tie(
     if p < TIE_LEVEL:
         return None
     return {
-        "effect": "unexplained", "model": model, "parameters": {},
-        "chi2": float(residuals @ residuals), "test": "vuong", "statistic": z, "p_value": p,
+        "effect": "unexplained",
+        "model": model,
+        "parameters": {},
+        "chi2": float(residuals @ residuals),
+        "test": "vuong",
+        "statistic": z,
+        "p_value": p,
         "max_difference_sigma": float(np.max(np.abs(residuals - best.residuals))),
-    }  # fmt: skip
+    }
 
 
 def ties(best: CandidateFit, others: Sequence[CandidateFit]) -> list[Tie]:

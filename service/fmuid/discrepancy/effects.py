@@ -181,9 +181,11 @@ class InputLag(Effect):
 
     def sentence(self, values: Mapping[str, float]) -> str:
         """Lag sentence."""
-        actuator = "actuator" if self.target not in self.words.roles else (
-            f"{self.words.roles[self.target]}ing actuator"
-        )  # fmt: skip
+        actuator = (
+            "actuator"
+            if self.target not in self.words.roles
+            else (f"{self.words.roles[self.target]}ing actuator")
+        )
         return (
             f"{self.words.variable(self.target, 'input')} acts through a first-order "
             f"{actuator} lag of time constant {num(self.value(values))} s"
@@ -216,9 +218,10 @@ class OutputLag(Effect):
     def sentence(self, values: Mapping[str, float]) -> str:
         """Lag sentence."""
         what = (
-            "the measured outputs lag" if not self.target
+            "the measured outputs lag"
+            if not self.target
             else f"the recorded {self.words.variable(self.target, 'output')} lags"
-        )  # fmt: skip
+        )
         return (
             f"{what} the model by a first-order filter of time constant "
             f"{num(self.value(values))} s (a sensor's or a recorder's filter)"

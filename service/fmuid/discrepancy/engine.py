@@ -126,9 +126,12 @@ def _correction(
     correction = arx_correction(locate.residual_series(problem, values))
     if generic is not None and pole is not None:
         correction["input_error_model"] = {
-            "model": describe(pole), "pole_hz": pole.pole_hz,
-            "chi2_drop": generic.statistic, "df": generic.df, "p_value": generic.p_value,
-        }  # fmt: skip
+            "model": describe(pole),
+            "pole_hz": pole.pole_hz,
+            "chi2_drop": generic.statistic,
+            "df": generic.df,
+            "p_value": generic.p_value,
+        }
     return correction
 
 
@@ -140,11 +143,19 @@ def _steps(
         e = s.effect
         values = {n: estimates[n].estimate for n in e.names}
         fine = e.side in ("feedback", "input") or e.effect == "output_lag"
-        out.append(EffectStep(
-            e.effect, e.label, e.sentence(values), {n: estimates[n] for n in e.names},
-            s.chi2_before, s.fit.chi2, s.fit.p_value, s.p_adjusted,
-            coupling if fine else None,
-        ))  # fmt: skip
+        out.append(
+            EffectStep(
+                e.effect,
+                e.label,
+                e.sentence(values),
+                {n: estimates[n] for n in e.names},
+                s.chi2_before,
+                s.fit.chi2,
+                s.fit.p_value,
+                s.p_adjusted,
+                coupling if fine else None,
+            )
+        )
     return tuple(out)
 
 
@@ -221,24 +232,35 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     bic_before = fit.chi2 + problem.n_free * float(np.log(fit.n_data))
     base_model = [(problem, dict(fit.estimates))]
     common: dict[str, Any] = {
-        "false_alarm": opts.alpha, "tests_before": tuple(family), "location": where,
-        "windows": tuple(found), "evidence": tuple(evidence), "chi2_before": fit.chi2,
-        "n_data": fit.n_data, "bic_before": bic_before,
+        "false_alarm": opts.alpha,
+        "tests_before": tuple(family),
+        "location": where,
+        "windows": tuple(found),
+        "evidence": tuple(evidence),
+        "chi2_before": fit.chi2,
+        "n_data": fit.n_data,
+        "bic_before": bic_before,
         "parameters_before": dict(fit.estimates),
         "fmu": {"sha256": fit.fmu_sha256, "model_name": fit.model_name},
         "scan_p_value": scan_test.p_value,
         "units": dict(fit.units),
-    }  # fmt: skip
+    }
     if not evidence:
         return Diagnosis(
-            mismatch=False, tests_after=tuple(tests_before), effect=None,
+            mismatch=False,
+            tests_after=tuple(tests_before),
+            effect=None,
             description=explain.no_mismatch(opts.alpha, scan_test.p_value),
-            candidates=tuple(score(f, a) for f, a in zip(fits, adjusted)), added_parameters={},
-            chi2_after=fit.chi2, lrt_p_value=None, bic_after=bic_before,
+            candidates=tuple(score(f, a) for f, a in zip(fits, adjusted)),
+            added_parameters={},
+            chi2_after=fit.chi2,
+            lrt_p_value=None,
+            bic_after=bic_before,
             parameters_after=dict(fit.estimates),
             validation=tuple(validation(base_model, test_data)),
-            cost=run.cost(), **common,
-        )  # fmt: skip
+            cost=run.cost(),
+            **common,
+        )
     # 4. add effects while a round's best candidate is significant
     seed_after = problem.spec.seed + 1
 
@@ -255,13 +277,21 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         run.report("generic correction")
         worst = min(tests_before, key=lambda t: t.p_value) if tests_before else None
         return Diagnosis(
-            mismatch=True, tests_after=tuple(tests_before), effect="unexplained",
+            mismatch=True,
+            tests_after=tuple(tests_before),
+            effect="unexplained",
             description=explain.unexplained(scores[0], worst, correction, where),
-            candidates=tuple(scores), added_parameters={}, chi2_after=fit.chi2,
-            lrt_p_value=scores[0].p_value, bic_after=bic_before,
-            parameters_after=dict(fit.estimates), generic_correction=correction,
-            validation=tuple(validation(base_model, test_data)), cost=run.cost(), **common,
-        )  # fmt: skip
+            candidates=tuple(scores),
+            added_parameters={},
+            chi2_after=fit.chi2,
+            lrt_p_value=scores[0].p_value,
+            bic_after=bic_before,
+            parameters_after=dict(fit.estimates),
+            generic_correction=correction,
+            validation=tuple(validation(base_model, test_data)),
+            cost=run.cost(),
+            **common,
+        )
     best = steps[0].fit
     applied = [s.effect for s in steps]
     aug, z = steps[-1].fit.problem, steps[-1].fit.z
@@ -272,9 +302,14 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     added = [p for c in applied for p in c.parameters]
     before = run.track(aug)
     prof = profile_problem(
-        aug, final_fit, only=[p.name for p in added], workers=opts.workers, options=opts.walk,
-        confidence=opts.ci_confidence, executor=run.executor,
-    )  # fmt: skip
+        aug,
+        final_fit,
+        only=[p.name for p in added],
+        workers=opts.workers,
+        options=opts.walk,
+        confidence=opts.ci_confidence,
+        executor=run.executor,
+    )
     run.profiled(before, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
     estimates = added_estimates(prof, added, opts.ci_confidence)
@@ -315,16 +350,35 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     effect_steps = _steps(steps, estimates, coupling)
     leftover = None if residuals_pass else _correction(aug, final_fit.estimates, None, None)
     return Diagnosis(
-        mismatch=True, tests_after=tuple(tests_after), effect=best.candidate.effect,
+        mismatch=True,
+        tests_after=tuple(tests_after),
+        effect=best.candidate.effect,
         description=explain.explained(
-            effect_steps, fit.chi2, final_fit.chi2, lrt, ties, concealed, rival, residuals_pass,
-        ) + explain.settle(tests) + explain.held_out(checked) + explain.levels(where["levels"]),
-        candidates=tuple(scores), added_parameters=estimates, chi2_after=final_fit.chi2,
-        lrt_p_value=lrt, bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
+            effect_steps,
+            fit.chi2,
+            final_fit.chi2,
+            lrt,
+            ties,
+            concealed,
+            rival,
+            residuals_pass,
+        )
+        + explain.settle(tests)
+        + explain.held_out(checked)
+        + explain.levels(where["levels"]),
+        candidates=tuple(scores),
+        added_parameters=estimates,
+        chi2_after=final_fit.chi2,
+        lrt_p_value=lrt,
+        bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
         parameters_after=dict(final_fit.estimates),
         second_effect=applied[1].effect if len(applied) > 1 else None,
-        indistinguishable=(*tied, *([rival] if rival else [])), absorbed=absorbed_by,
+        indistinguishable=(*tied, *([rival] if rival else [])),
+        absorbed=absorbed_by,
         discriminating_experiment=proposal.to_dict() if proposal else None,
-        generic_correction=leftover, effects=effect_steps, validation=tuple(checked),
-        cost=run.cost(), **common,
-    )  # fmt: skip
+        generic_correction=leftover,
+        effects=effect_steps,
+        validation=tuple(checked),
+        cost=run.cost(),
+        **common,
+    )

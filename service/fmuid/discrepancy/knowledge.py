@@ -145,7 +145,7 @@ def model_knowledge(fmu: FmuModel | str | Path, spec: Spec) -> ModelKnowledge:
                 ParameterSpec(start=p.start, lower=p.lower, upper=p.upper, scale=p.scale),
                 p.off,
                 _side(p.off, p.lower, p.upper, None),
-            )  # fmt: skip
+            )
             for name, p in entry.parameters.items()
         )
         text = entry.description or f"the switchable physics '{effect}' is on"

@@ -139,9 +139,7 @@ def level_location(series: Sequence[ResidualSeries], alpha: float) -> dict[str, 
         r = np.concatenate([s.weighted for s in parts])
         rate = np.concatenate([np.gradient(s.model, s.time) for s in parts])
         base = np.column_stack([np.ones_like(y), y])
-        tests = {
-            name: _f_test(r, base, shape) for name, shape in _shapes(y, rate).items()
-        }  # fmt: skip
+        tests = {name: _f_test(r, base, shape) for name, shape in _shapes(y, rate).items()}
         tests["amplitude"] = _amplitude(parts)
         name = max(tests, key=lambda k: (tests[k][0] < alpha, tests[k][1]))
         p, share = tests[name]

@@ -102,10 +102,15 @@ def experiments_disagree(problem: Problem, fit: FitResult, max_nfev: int) -> rt.
     z0 = fit.z_estimate()
     for i, exp in enumerate(problem.experiments):
         one = Problem(
-            problem.fmu_path, [exp], problem.spec, predictor=problem.predictor,
-            parameters=problem.parameter_specs, sigma=[problem.sigma[i]],
-            sigma_method=problem.sigma_method, model=problem.model,
-        )  # fmt: skip
+            problem.fmu_path,
+            [exp],
+            problem.spec,
+            predictor=problem.predictor,
+            parameters=problem.parameter_specs,
+            sigma=[problem.sigma[i]],
+            sigma_method=problem.sigma_method,
+            model=problem.model,
+        )
         _, chi2, _ = refine(one, z0, options=FitOptions(ftol=1e-8, max_nfev=max_nfev))
         separate += chi2
         problem.simulations += one.simulations

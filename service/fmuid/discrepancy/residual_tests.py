@@ -216,9 +216,13 @@ def bias(series: Series) -> TestResult:
     sd = float(np.std(r, ddof=1))
     t = float(np.mean(r) / (sd / np.sqrt(n))) if sd > 0 else 0.0
     return TestResult(
-        "residual_bias", series.output, series.experiment, float(2 * stats.t.sf(abs(t), n - 1)), t,
+        "residual_bias",
+        series.output,
+        series.experiment,
+        float(2 * stats.t.sf(abs(t), n - 1)),
+        t,
         n - 1,
-    )  # fmt: skip
+    )
 
 
 def goodness_of_fit(series: Series) -> TestResult:
@@ -226,9 +230,13 @@ def goodness_of_fit(series: Series) -> TestResult:
     chi2 = float(series.residuals @ series.residuals)
     n = len(series.residuals)
     return TestResult(
-        "chi2_goodness_of_fit", series.output, series.experiment, float(stats.chi2.sf(chi2, n)),
-        chi2, n,
-    )  # fmt: skip
+        "chi2_goodness_of_fit",
+        series.output,
+        series.experiment,
+        float(stats.chi2.sf(chi2, n)),
+        chi2,
+        n,
+    )
 
 
 def global_goodness_of_fit(chi2: float, n_data: int, n_free: int) -> TestResult:

@@ -163,13 +163,17 @@ class EffectStep:
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON form."""
         return {
-            "effect": self.effect, "label": self.label, "description": self.description,
+            "effect": self.effect,
+            "label": self.label,
+            "description": self.description,
             "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
-            "chi2_before": float(self.chi2_before), "chi2_after": float(self.chi2_after),
+            "chi2_before": float(self.chi2_before),
+            "chi2_after": float(self.chi2_after),
             "chi2_drop": float(self.chi2_before - self.chi2_after),
-            "p_value": float(self.p_value), "p_adjusted": float(self.p_adjusted),
+            "p_value": float(self.p_value),
+            "p_adjusted": float(self.p_adjusted),
             "coupling_error": self.coupling_error,
-        }  # fmt: skip
+        }
 
 
 @dataclass(frozen=True)
@@ -333,8 +337,12 @@ def verdict(d: dict[str, Any]) -> str:
     ties = [t["effect"] if isinstance(t, dict) else str(t) for t in d.get("indistinguishable", [])]
     named = [effect_of(e["effect"]) for e in d.get("effects") or []] or [effect_of(effect)]
     p = d.get("lrt_p_value")
-    words = "evidence" if p is None else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else
-                                          "moderate") + f" evidence ({p_text(p)})"  # fmt: skip
+    words = (
+        "evidence"
+        if p is None
+        else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else "moderate")
+        + f" evidence ({p_text(p)})"
+    )
     what = ", then ".join(named)
     verb = "explains" if len(named) == 1 else "explain"
     if "unexplained" in ties:

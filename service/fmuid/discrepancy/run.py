@@ -35,9 +35,16 @@ def fit_of(problem: Problem, z: np.ndarray, chi2: float, t0: float) -> FitResult
 def score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
     """Return a scored candidate's summary for the result."""
     return CandidateScore(
-        f.candidate.effect, f.values, f.chi2, f.p_value, f.bic, f.stage, f.statistic,
-        p_adjusted, f.fitted,
-    )  # fmt: skip
+        f.candidate.effect,
+        f.values,
+        f.chi2,
+        f.p_value,
+        f.bic,
+        f.stage,
+        f.statistic,
+        p_adjusted,
+        f.fitted,
+    )
 
 
 def added_estimates(
@@ -96,9 +103,15 @@ class Run:
             self.report(f"round {stage}: {f.candidate.label} chi2 {f.chi2:.4g}")
 
         fits = scan(
-            scanner, pool, screen_level=self.opts.screen_level, min_fits=self.opts.min_fits,
-            options=self.opts.fit, stage=stage, on_candidate=seen, mapper=self.mapper,
-        )  # fmt: skip
+            scanner,
+            pool,
+            screen_level=self.opts.screen_level,
+            min_fits=self.opts.min_fits,
+            options=self.opts.fit,
+            stage=stage,
+            on_candidate=seen,
+            mapper=self.mapper,
+        )
         return fits, decide.min_p(fits, self.problem.spec.seed + stage)
 
     def track(self, problem: Problem) -> int:

@@ -140,9 +140,15 @@ def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
     wrapped = AugmentedPredictor(base, effects) if isinstance(base, FmuPredictor) else None
     predictor = wrapped if wrapped is not None and (effects or wrapped.fine_inputs) else base
     return Problem(
-        root.fmu_path, root.experiments, root.spec, predictor=predictor, parameters=params,
-        sigma=root.sigma, sigma_method=root.sigma_method, model=root.model,
-    )  # fmt: skip
+        root.fmu_path,
+        root.experiments,
+        root.spec,
+        predictor=predictor,
+        parameters=params,
+        sigma=root.sigma,
+        sigma_method=root.sigma_method,
+        model=root.model,
+    )
 
 
 def _probe(p: AddedParameter) -> float:
@@ -257,10 +263,18 @@ class Scanner:
             z_start[:n_base] + step, self.problem.z_lower, self.problem.z_upper
         )
         return CandidateFit(
-            candidate, aug, z_start, self.chi2 - statistic, statistic,
-            null_p_value(statistic, len(params), one_sided), one_sided, False, best_r,
-            directions, stage,
-        )  # fmt: skip
+            candidate,
+            aug,
+            z_start,
+            self.chi2 - statistic,
+            statistic,
+            null_p_value(statistic, len(params), one_sided),
+            one_sided,
+            False,
+            best_r,
+            directions,
+            stage,
+        )
 
     def fit(self, screened: CandidateFit, options: FitOptions) -> CandidateFit:
         """Fit every parameter of a screened candidate from the screen's best point."""
@@ -275,10 +289,18 @@ class Scanner:
         statistic = max(self.chi2 - chi2, 0.0)
         df = len(screened.candidate.parameters)
         return CandidateFit(
-            screened.candidate, aug, z, chi2, statistic,
-            null_p_value(statistic, df, screened.one_sided), screened.one_sided, True, r,
-            screened.directions, screened.stage,
-        )  # fmt: skip
+            screened.candidate,
+            aug,
+            z,
+            chi2,
+            statistic,
+            null_p_value(statistic, df, screened.one_sided),
+            screened.one_sided,
+            True,
+            r,
+            screened.directions,
+            screened.stage,
+        )
 
 
 def screen_task(scanner: Scanner, candidate: Effect, stage: int) -> CandidateFit:

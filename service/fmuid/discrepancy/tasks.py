@@ -55,11 +55,15 @@ def dask_mapper(client: Any, problem: Problem) -> Mapper:
     def mapper(fn: Callable[..., Any], *iterables: Sequence[Any]) -> list[Any]:
         futures = [
             client.submit(
-                run_anywhere, PickledTask(model.file, pickle.dumps((fn, args))), model.sha256,
-                blob, unreliable, pure=False,
+                run_anywhere,
+                PickledTask(model.file, pickle.dumps((fn, args))),
+                model.sha256,
+                blob,
+                unreliable,
+                pure=False,
             )
             for args in zip(*iterables, strict=True)
-        ]  # fmt: skip
+        ]
         return list(client.gather(futures))
 
     return mapper

@@ -49,8 +49,9 @@ def coupling_error(problem: Problem, values: Mapping[str, float]) -> float | Non
     predictor = problem.predictor
     if not isinstance(predictor, AugmentedPredictor):
         return None
-    if not any(e.side in ("feedback", "input") or e.effect == "output_lag"
-               for e in predictor.effects):  # fmt: skip
+    if not any(
+        e.side in ("feedback", "input") or e.effect == "output_lag" for e in predictor.effects
+    ):
         return None
     half = AugmentedPredictor(predictor.base, predictor.effects, predictor.step_scale / 2)
     worst = 0.0

@@ -7,10 +7,20 @@ from dataclasses import dataclass, field
 
 ORDINAL = {2: "square", 3: "cube", 4: "fourth power", 5: "fifth power"}
 _QUANTITY = {
-    "N": "force", "kN": "force", "N.m": "torque", "N m": "torque", "Nm": "torque",
-    "m": "displacement", "mm": "displacement", "rad": "angle", "deg": "angle",
-    "m/s": "velocity", "rad/s": "angular rate", "V": "voltage", "A": "current",
-}  # fmt: skip
+    "N": "force",
+    "kN": "force",
+    "N.m": "torque",
+    "N m": "torque",
+    "Nm": "torque",
+    "m": "displacement",
+    "mm": "displacement",
+    "rad": "angle",
+    "deg": "angle",
+    "m/s": "velocity",
+    "rad/s": "angular rate",
+    "V": "voltage",
+    "A": "current",
+}
 
 
 @dataclass(frozen=True)
