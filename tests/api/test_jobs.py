@@ -5,13 +5,13 @@ from __future__ import annotations
 import json
 import time
 
+import numpy as np
 import pytest
 
-import fieldtruth as ft
 import fmuid
 from api_helpers import msd_spec
+from discrepancy.test_parallel_scan import OFFSET_SPEC, offset_record
 from fmuid.data import load_experiment, spec_from_json
-from fmuid.model.builtin import builtin_fmu
 
 pytestmark = pytest.mark.slow
 
@@ -126,31 +126,21 @@ def test_profile_on_dask_local_cluster_equals_local_pool(service_factory, step_c
 
 
 @pytest.mark.slow
-def test_diagnose_job_names_a_concealed_offset_as_the_direct_call_does(service, tmp_path):
-    case = ft.make_case("input_offset", 0.0004, seed=8, rate=5.0)
-    paths = case.write(tmp_path / "offset")
-    spec = {
-        "parameters": {
-            n: {"start": ft.NOMINAL[n], "lower": lo, "upper": hi}
-            for n, (lo, hi) in ft.BOUNDS.items()
-        },
-        "inputs": ["delta"],
-        "outputs": {"gam_t": {"sigma": "column"}, "gam_i": {"sigma": "column"}},
-        "global_search": False,
-    }
+def test_diagnose_job_names_an_input_offset_as_the_direct_call_does(service, tmp_path):
+    record = offset_record()  # the msd driven by f + an offset (scipy), with noise
+    path = tmp_path / record.name
+    columns = [record.time, record.columns["f"], record.columns["x"]]
+    np.savetxt(path, np.column_stack(columns), delimiter=",", header="time,f,x", comments="")
+    spec = json.loads(OFFSET_SPEC)
     client = service.client()
-    job = client.submit("diagnose", spec, paths, model="tractor_implement")
+    job = client.submit("diagnose", spec, [path], model="msd")
     status = client.wait(job, timeout=900)
     assert status["status"] == "done", status
     result = client.result(job)
-    direct = fmuid.diagnose(
-        builtin_fmu("tractor_implement"),
-        [load_experiment(p) for p in paths],
-        spec_from_json(json.dumps(spec)),
-    ).to_dict()
+    direct = fmuid.diagnose("msd", [load_experiment(path)], spec_from_json(OFFSET_SPEC)).to_dict()
     assert result["effect"] == direct["effect"] == "input_offset"
     assert result["verdict"] == direct["verdict"]
-    assert result["added_parameters"]["offset_delta"]["ci"] == pytest.approx(
-        direct["added_parameters"]["offset_delta"]["ci"], rel=1e-6
+    assert result["added_parameters"]["offset_f"]["ci"] == pytest.approx(
+        direct["added_parameters"]["offset_f"]["ci"], rel=1e-6
     )
     assert "Verdict" in client.report(job)

@@ -14,7 +14,7 @@ from fmuid.discrepancy import DiagnoseOptions, diagnose
 M, K, B, OFFSET, SIGMA = 1.1, 4.4, 1.6, 0.08, 0.005
 
 
-def _offset_record():  # type: ignore[no-untyped-def]
+def offset_record():  # type: ignore[no-untyped-def]
     """m x'' + b x' + k x = f + offset (scipy), noise added."""
     rng = np.random.default_rng(5)
     t = np.arange(0.0, 15.0, 0.05)
@@ -29,11 +29,12 @@ def _offset_record():  # type: ignore[no-untyped-def]
     )
 
 
-SPEC = spec_from_json(
+OFFSET_SPEC = (
     '{"parameters": {"k": {"start": 4, "lower": 0.1, "upper": 20}, "b": {"start": 1,'
     ' "lower": 0.1, "upper": 10}}, "fixed": {"m": 1.1}, "inputs": ["f"],'
     ' "outputs": {"x": {"sigma": 0.005}}, "seed": 0, "global_search": false}'
 )
+SPEC = spec_from_json(OFFSET_SPEC)
 
 
 def _comparable(result: dict) -> dict:  # type: ignore[type-arg]
@@ -44,7 +45,7 @@ def _comparable(result: dict) -> dict:  # type: ignore[type-arg]
 
 @pytest.mark.slow
 def test_two_workers_give_the_same_diagnosis(msd_fmu: Path) -> None:
-    data = [_offset_record()]
+    data = [offset_record()]
     results = []
     for workers in (1, 2):
         opts = DiagnoseOptions(workers=workers, absorbed=False, discriminate=False)
@@ -60,7 +61,7 @@ def test_two_workers_give_the_same_diagnosis(msd_fmu: Path) -> None:
 def test_a_dask_cluster_gives_the_local_diagnosis(msd_fmu: Path) -> None:
     from distributed import Client, LocalCluster
 
-    data = [_offset_record()]
+    data = [offset_record()]
     opts = DiagnoseOptions(absorbed=False, discriminate=False)
     local = diagnose(msd_fmu, data, SPEC, options=opts).to_dict()
     with LocalCluster(
