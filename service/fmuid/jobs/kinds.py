@@ -163,32 +163,23 @@ def _fit(inputs: JobInputs, context: RunContext) -> Any:
     )
 
 
-def _profile(inputs: JobInputs, context: RunContext) -> Any:
-    import fmuid
+def _on_cluster(stage: str) -> Callable[[JobInputs, RunContext], Any]:
+    """Run ``fmuid.<stage>`` (profile, diagnose) on the service's dask scheduler if it has one."""
 
-    with context.executor() as executor:
-        return fmuid.profile(
-            inputs.fmu,
-            inputs.experiments,
-            inputs.spec,
-            progress=context.progress,
-            executor=executor,
-            test_data=inputs.test_data,
-        )
+    def run(inputs: JobInputs, context: RunContext) -> Any:
+        import fmuid
 
+        with context.executor() as executor:
+            return getattr(fmuid, stage)(
+                inputs.fmu,
+                inputs.experiments,
+                inputs.spec,
+                progress=context.progress,
+                executor=executor,
+                test_data=inputs.test_data,
+            )
 
-def _diagnose(inputs: JobInputs, context: RunContext) -> Any:
-    import fmuid
-
-    with context.executor() as executor:
-        return fmuid.diagnose(
-            inputs.fmu,
-            inputs.experiments,
-            inputs.spec,
-            progress=context.progress,
-            test_data=inputs.test_data,
-            executor=executor,
-        )
+    return run
 
 
 def _design(inputs: JobInputs, context: RunContext) -> Any:
@@ -225,8 +216,8 @@ def _draw_design(result: Any, inputs: JobInputs, directory: Path) -> None:
 RUNNERS: Mapping[Kind, Runner] = MappingProxyType(
     {
         "fit": Runner("fit", False, _experiments, _fit, _draw_study),
-        "profile": Runner("profile", False, _experiments, _profile, _draw_study),
-        "diagnose": Runner("diagnose", False, _experiments, _diagnose, _draw_study),
+        "profile": Runner("profile", False, _experiments, _on_cluster("profile"), _draw_study),
+        "diagnose": Runner("diagnose", False, _experiments, _on_cluster("diagnose"), _draw_study),
         "design": Runner("design", True, _space, _design, _draw_design),
     }
 )

@@ -26,7 +26,7 @@ import uuid
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import ParamSpec, TypeVar
+from typing import ParamSpec, TypeVar, cast
 
 from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.records import FINAL_STATUSES, STATUSES, Dataset, Job, Kind
@@ -98,8 +98,7 @@ def retried(method: Callable[P, R]) -> Callable[P, R]:
 
     @functools.wraps(method)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
-        store = args[0]
-        assert isinstance(store, JobStore)
+        store = cast(JobStore, args[0])
         for attempt in range(WRITE_ATTEMPTS):
             try:
                 return method(*args, **kwargs)
@@ -154,7 +153,7 @@ class JobStore:
         """Give a store made by an earlier version the columns added since (:data:`_ADDED`)."""
         conn = self._connection()
         columns = {row[1] for row in conn.execute("PRAGMA table_info(jobs)")}
-        for name in [name for name in _ADDED if name not in columns]:
+        for name in _ADDED.keys() - columns:
             try:
                 conn.execute(f"ALTER TABLE jobs ADD COLUMN {name} {_ADDED[name]}")
             except sqlite3.OperationalError as exc:  # another process added it meanwhile

@@ -141,11 +141,9 @@ def load_model(file: FmuFile) -> FmuModel:
 
     """
     key = (file.sha256, file.interface)
-    model = _LOADED.get(key)
-    if model is None:
-        model = FmuModel(file.path, file.interface, sha256=file.sha256)
-        _LOADED[key] = model
-    return model
+    if key not in _LOADED:
+        _LOADED[key] = FmuModel(file.path, file.interface, sha256=file.sha256)
+    return _LOADED[key]
 
 
 class FmuModel:
@@ -354,8 +352,7 @@ class FmuModel:
                         f"{v.causality}, which fmuid cannot use there ({_ROLE_HELP[field]})"
                     )
         for name, value in fixed.items():
-            v = self.parameters.get(name)
-            if v is None:
+            if (v := self.parameters.get(name)) is None:
                 continue
             number = not isinstance(value, str | bool)
             fits = {
