@@ -18,7 +18,10 @@ p-value is that of the smallest candidate p-value, calibrated for the candidates
 ``Z = U^T e`` of the noise on the candidates' score directions, ``Z ~ N(0, U^T U)``, which are
 drawn (seeded) to find the distribution of the smallest p-value. Look-alike candidates (a lag
 on the input or on the outputs) thus cost the family almost nothing extra. The Bonferroni bound
-caps it.
+caps it. A threshold candidate (a saturation, a dead zone) is fitted over a continuum of levels
+and carries the null of that supremum (:mod:`.threshold`): :func:`calibrate` then draws the white
+noise itself, in batches, and gives every candidate's score and every threshold's supremum from
+the same draws (a threshold's p-value, its own and in the min-P, is its Monte Carlo tail).
 
 **Ties.** Two significant candidates are indistinguishable when their fitted weighted
 predictions are equal (``equal_predictions``: no experiment of this design can tell them
@@ -35,10 +38,11 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from scipy import stats
+from scipy import special, stats
 
 from fmuid.discrepancy.residual_tests import TestResult
 from fmuid.discrepancy.scan import CandidateFit
+from fmuid.discrepancy.threshold import BATCH
 from fmuid.readable import p_text
 
 SCAN_WEIGHT = 0.7
@@ -94,9 +98,27 @@ def _null_stats(draws: np.ndarray, fits: Sequence[Scored], blocks: list[slice]) 
             out[:, k] = 1.0
         elif f.one_sided and df == 1:
             t = np.maximum(z[:, 0], 0.0) ** 2
-            out[:, k] = np.where(t > 0, 0.5 * stats.chi2.sf(t, 1), 1.0)
+            out[:, k] = np.where(t > 0, 0.5 * special.chdtrc(1, t), 1.0)
         else:
-            out[:, k] = stats.chi2.sf(np.sum(z**2, axis=1), df)
+            out[:, k] = special.chdtrc(df, np.sum(z**2, axis=1))
+    return out
+
+
+def _blocks(fits: Sequence[Scored]) -> tuple[list[slice], np.ndarray]:
+    blocks, start = [], 0
+    for f in fits:
+        blocks.append(slice(start, start + f.directions.shape[1]))
+        start += f.directions.shape[1]
+    return blocks, np.hstack([f.directions for f in fits])
+
+
+def _adjusted(smallest: np.ndarray, own: Sequence[float]) -> list[float]:
+    """Min-P adjusted p-values from the sorted smallest p-value of each null draw."""
+    out = []
+    for p in own:
+        exceed = np.searchsorted(smallest, p, side="right")
+        monte_carlo = (exceed + 1) / (len(smallest) + 1)
+        out.append(float(min(monte_carlo, len(own) * p, 1.0)))
     return out
 
 
@@ -104,23 +126,50 @@ def min_p(fits: Sequence[Scored], seed: int) -> list[float]:
     """Single-step min-P adjusted p-value of each test (see the module docstring)."""
     if not fits:
         return []
-    blocks, start = [], 0
-    for f in fits:
-        blocks.append(slice(start, start + f.directions.shape[1]))
-        start += f.directions.shape[1]
-    u = np.hstack([f.directions for f in fits])
+    blocks, u = _blocks(fits)
     gram = u.T @ u
     w, v = np.linalg.eigh(gram)
     root = v * np.sqrt(np.clip(w, 0.0, None))
     rng = np.random.default_rng(seed)
     draws = rng.standard_normal((NULL_DRAWS, len(w))) @ root.T
     smallest = np.sort(_null_stats(draws, fits, blocks).min(axis=1))
-    out = []
-    for f in fits:
-        exceed = np.searchsorted(smallest, f.p_value, side="right")
-        monte_carlo = (exceed + 1) / (NULL_DRAWS + 1)
-        out.append(float(min(monte_carlo, len(fits) * f.p_value, 1.0)))
-    return out
+    return _adjusted(smallest, [f.p_value for f in fits])
+
+
+def _ranks(null: np.ndarray, observed: float) -> tuple[np.ndarray, float]:
+    """Monte Carlo p-values of the null draws and of the observed statistic, on one scale.
+
+    Each is ``(1 + the others at or above it) / (draws + 1)``, the observed value counted among
+    the draws' others: the draws and the observed are exchangeable under the null.
+    """
+    ordered = np.sort(np.append(null, observed))
+    at_or_above = len(ordered) - np.searchsorted(ordered, np.append(null, observed), side="left")
+    p = at_or_above / len(ordered)
+    return p[:-1], float(p[-1])
+
+
+def calibrate(fits: Sequence[CandidateFit], seed: int) -> tuple[list[float], list[float]]:
+    """Each candidate's own p-value and its min-P adjusted p-value.
+
+    A threshold candidate's own p-value is the Monte Carlo tail of its statistic under its
+    null (:mod:`.threshold`), drawn jointly with the other candidates' scores; without one,
+    the candidates' own p-values stand and :func:`min_p` adjusts them.
+    """
+    thresholds = [k for k, f in enumerate(fits) if f.null is not None]
+    if not thresholds:
+        return [f.p_value for f in fits], min_p(fits, seed)
+    blocks, u = _blocks(fits)
+    rng = np.random.default_rng(seed)
+    scores, sups = [], []
+    for start in range(0, NULL_DRAWS, BATCH):
+        e = rng.standard_normal((min(BATCH, NULL_DRAWS - start), u.shape[0]))
+        scores.append(_null_stats(e @ u, fits, blocks))
+        sups.append(np.column_stack([fits[k].null.statistics(e) for k in thresholds]))  # type: ignore[union-attr]
+    p_draws, sup = np.vstack(scores), np.vstack(sups)
+    own = [f.p_value for f in fits]
+    for column, k in enumerate(thresholds):
+        p_draws[:, k], own[k] = _ranks(sup[:, column], fits[k].statistic)
+    return own, _adjusted(np.sort(p_draws.min(axis=1)), own)
 
 
 def weighted_holm(tests: Sequence[tuple[TestResult, float]], alpha: float) -> list[TestResult]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -112,7 +113,8 @@ class Run:
             on_candidate=seen,
             mapper=self.mapper,
         )
-        return fits, decide.min_p(fits, self.problem.spec.seed + stage)
+        own, adjusted = decide.calibrate(fits, self.problem.spec.seed + stage)
+        return [replace(f, p_value=p) for f, p in zip(fits, own)], adjusted
 
     def track(self, problem: Problem) -> int:
         """Count ``problem``'s simulations from now on; return :meth:`spent` so far."""

@@ -32,8 +32,9 @@ import numpy as np
 from scipy import stats
 
 from fmuid.discrepancy.augment import AugmentedPredictor
-from fmuid.discrepancy.effects import Effect
+from fmuid.discrepancy.effects import Effect, OutputSaturation
 from fmuid.discrepancy.knowledge import AddedParameter
+from fmuid.discrepancy.threshold import ClipNull, LevelsNull, ThresholdNull, unit_columns
 from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine, safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
@@ -82,6 +83,8 @@ class CandidateFit:
         out (one column per added parameter).
     stage
         1 on the base model, 2 on top of a first effect.
+    null
+        A threshold's null of ``statistic`` (:mod:`.threshold`); ``None``: ``p_value``'s.
 
     """
 
@@ -96,6 +99,7 @@ class CandidateFit:
     residuals: np.ndarray
     directions: np.ndarray
     stage: int = 1
+    null: ThresholdNull | None = None
 
     @property
     def values(self) -> dict[str, float]:
@@ -209,6 +213,23 @@ class Scanner:
         self.chi2 = float(self.r0 @ self.r0)
         self.jac = np.asarray(jacobian, dtype=float)
         self.basis = sensitivity_basis(self.jac)
+        self.rows = _output_rows(problem)
+
+    def threshold_null(self, candidate: Effect, levels: np.ndarray) -> ThresholdNull | None:
+        """Return the null of a threshold's statistic (``levels``: its screened levels' ``d_g``).
+
+        An output limit's is exact in the level (:class:`~.threshold.ClipNull`); an input
+        threshold's runs over the screened levels (:class:`~.threshold.LevelsNull`).
+        """
+        if not candidate.threshold:
+            return None
+        if isinstance(candidate, OutputSaturation) and candidate.target in self.rows:
+            rows, data, weight = self.rows[candidate.target]
+            spec = candidate.parameters[0].spec
+            floor = spec.lower if candidate.upper else spec.upper
+            predicted = data - self.r0[rows] / weight
+            return ClipNull.build(rows, predicted, weight, self.basis, floor, candidate.upper)
+        return LevelsNull(unit_columns(self.project(levels)))
 
     def project(self, v: np.ndarray) -> np.ndarray:
         """``(I - P) v``: what no move of the base parameters reproduces."""
@@ -247,8 +268,10 @@ class Scanner:
             )
         base_lin = float(self.project(self.r0) @ self.project(self.r0))
         best_point, best_chi2, best_r = None, base_lin, self.r0
+        changes = []
         for point in points:
             r = self._residuals_at(aug, point)
+            changes.append(self.r0 - r)
             rp = self.project(r)
             chi2_lin = float(rp @ rp)
             if chi2_lin < best_chi2:
@@ -274,6 +297,7 @@ class Scanner:
             best_r,
             directions,
             stage,
+            self.threshold_null(candidate, np.column_stack(changes) if changes else d),
         )
 
     def fit(self, screened: CandidateFit, options: FitOptions) -> CandidateFit:
@@ -300,7 +324,24 @@ class Scanner:
             r,
             screened.directions,
             screened.stage,
+            screened.null,
         )
+
+
+def _output_rows(problem: Problem) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Each output's indices in the residual vector, its data and ``1/sigma`` there."""
+    parts: dict[str, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
+    start = 0
+    for masks, data, sigma in zip(problem.masks, problem.data, problem.sigma):
+        for j, o in enumerate(problem.outputs):
+            n = int(masks[j].sum())
+            rows = np.arange(start, start + n)
+            parts.setdefault(o, []).append((rows, data[j], 1.0 / sigma[o][masks[j]]))
+            start += n
+    return {
+        o: tuple(np.concatenate([p[k] for p in ps]) for k in range(3))  # type: ignore[misc]
+        for o, ps in parts.items()
+    }
 
 
 def screen_task(scanner: Scanner, candidate: Effect, stage: int) -> CandidateFit:
