@@ -88,6 +88,13 @@ class Scored(Protocol):
         """The test's own p-value."""
 
 
+SUPREMUM = 0.05
+"""A threshold candidate whose chi-bar-square p-value of one direction is above this keeps it:
+the supremum's tail is heavier still, so it cannot be significant, and its score's p-value
+in the draws stays uniform (the others' adjustment is as valid). This spares the supremum's
+cost where it cannot change a decision."""
+
+
 def _null_stats(draws: np.ndarray, fits: Sequence[Scored], blocks: list[slice]) -> np.ndarray:
     """Each candidate's p-value for every null draw (draws x candidates)."""
     out = np.empty((draws.shape[0], len(fits)))
@@ -152,10 +159,11 @@ def calibrate(fits: Sequence[CandidateFit], seed: int) -> tuple[list[float], lis
     """Each candidate's own p-value and its min-P adjusted p-value.
 
     A threshold candidate's own p-value is the Monte Carlo tail of its statistic under its
-    null (:mod:`.threshold`), drawn jointly with the other candidates' scores; without one,
-    the candidates' own p-values stand and :func:`min_p` adjusts them.
+    null (:mod:`.threshold`), drawn jointly with the other candidates' scores, when its
+    chi-bar-square p-value is below :data:`SUPREMUM`; otherwise, and without one, the
+    candidates' own p-values stand and :func:`min_p` adjusts them.
     """
-    thresholds = [k for k, f in enumerate(fits) if f.null is not None]
+    thresholds = [k for k, f in enumerate(fits) if f.null is not None and f.p_value < SUPREMUM]
     if not thresholds:
         return [f.p_value for f in fits], min_p(fits, seed)
     blocks, u = _blocks(fits)
