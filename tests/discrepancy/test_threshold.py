@@ -9,10 +9,13 @@ closed form of the module.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pytest
 from scipy import optimize, stats
 
+from fmuid.discrepancy.decide import NULL_DRAWS, calibrate
 from fmuid.discrepancy.threshold import ClipNull, LevelsNull, unit_columns
 
 N = 30
@@ -107,3 +110,30 @@ def test_levels_null_is_the_largest_one_sided_score() -> None:
     assert np.mean(two.statistics(rng.standard_normal((40000, 40))) >= 2.0) == pytest.approx(
         stats.chi2.sf(2.0, 1), abs=0.005
     )
+
+
+@dataclass(frozen=True)
+class _Fit:
+    """What :func:`calibrate` reads of a candidate."""
+
+    directions: np.ndarray
+    one_sided: bool
+    p_value: float
+    statistic: float
+    null: LevelsNull | None = None
+
+
+def test_calibrate_gives_a_threshold_its_nulls_tail_jointly_with_the_others() -> None:
+    """A threshold alone: its tail (closed form); beside its own score: min-P of two copies."""
+    u = unit_columns(np.random.default_rng(2).standard_normal((30, 1)))
+    t = 6.0
+    chi_bar = 0.5 * stats.chi2.sf(t, 1)
+    threshold = _Fit(u, True, chi_bar, t, LevelsNull(u))
+    own, adjusted = calibrate([threshold], seed=4)  # type: ignore[list-item]
+    error = 3 * np.sqrt(chi_bar / NULL_DRAWS)
+    assert own[0] == pytest.approx(chi_bar, abs=error)
+    assert adjusted[0] == pytest.approx(chi_bar, abs=error)
+    score = _Fit(u, True, chi_bar, t)
+    own, adjusted = calibrate([threshold, score], seed=4)  # type: ignore[list-item]
+    assert adjusted[0] == pytest.approx(chi_bar, abs=error)  # the same statistic twice
+    assert adjusted[1] == pytest.approx(chi_bar, abs=error)
