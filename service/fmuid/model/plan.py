@@ -42,8 +42,9 @@ class RunPlan:
         Input slopes over each grid interval [unit/s]; zero for held (non-float) inputs.
     input_time
         The input sample times [s].
-    rows_at
-        For each grid point, the rows of the result read there.
+    row_start, rows
+        ``rows[row_start[k]:row_start[k + 1]]`` are the rows of the result read at grid point
+        ``k`` (:attr:`rows_at` as lists).
     n_rows
         Number of output rows.
 
@@ -53,8 +54,16 @@ class RunPlan:
     value: np.ndarray
     slope: np.ndarray
     input_time: np.ndarray
-    rows_at: list[list[int]]
+    row_start: np.ndarray
+    rows: np.ndarray
     n_rows: int
+
+    @cached_property
+    def rows_at(self) -> list[list[int]]:
+        """For each grid point, the rows of the result read there (for the Python loops)."""
+        rows = self.rows.tolist()
+        bounds = self.row_start.tolist()
+        return [rows[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
     @cached_property
     def jump(self) -> np.ndarray:
@@ -70,14 +79,13 @@ class RunPlan:
     @cached_property
     def arrays(self) -> GridArrays:
         """The plan as contiguous float64, uint8 and int64 arrays (made once per plan)."""
-        counts = [len(rows) for rows in self.rows_at]
         return GridArrays(
             np.ascontiguousarray(self.times, dtype=np.float64),
             np.ascontiguousarray(self.value, dtype=np.float64),
             np.ascontiguousarray(self.slope, dtype=np.float64),
             np.ascontiguousarray(np.any(self.slope, axis=1), dtype=np.uint8),
-            np.concatenate(([0], np.cumsum(counts))).astype(np.int64),
-            np.array([r for rows in self.rows_at for r in rows], dtype=np.int64),
+            np.ascontiguousarray(self.row_start, dtype=np.int64),
+            np.ascontiguousarray(self.rows, dtype=np.int64),
         )
 
     @property
@@ -132,10 +140,10 @@ def make_plan(
         hold = np.searchsorted(t_in, grid, side="right") - 1
         value[:, held] = samples[held][:, np.maximum(hold, 0)].T
         slope[:, held] = 0.0
-    rows_at: list[list[int]] = [[] for _ in grid]
-    for row, k in enumerate(np.searchsorted(grid, t_out).tolist()):
-        rows_at[k].append(row)
-    return RunPlan(grid.tolist(), value, slope, t_in, rows_at, t_out.size)
+    point = np.searchsorted(grid, t_out)
+    rows = np.argsort(point, kind="stable")
+    row_start = np.concatenate(([0], np.cumsum(np.bincount(point, minlength=grid.size))))
+    return RunPlan(grid.tolist(), value, slope, t_in, row_start, rows, t_out.size)
 
 
 def _check_kind(variable: Variable, values: np.ndarray, t_in: np.ndarray) -> None:
