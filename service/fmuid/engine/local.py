@@ -4,8 +4,9 @@ A pool worker parses the FMU once, from the file and checksum its owner hands it
 its instance warm across the tasks; the tasks' pickled problems then find that model
 (:func:`fmuid.model.fmu.load_model`). The owner's verdict on the FMU's reset is passed to the
 workers (forkserver workers do not inherit it). A task's progress events reach the owner
-through a queue each worker is given when it starts (a queue cannot travel with a task), tagged
-with the task's index.
+through a pipe each worker is given when it starts (a pipe cannot travel with a task), tagged
+with the task's index; an event is written before its task returns, so that the owner reads a
+task's events before its result.
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import os
-import queue
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
@@ -33,7 +33,7 @@ _POLL = 0.2
 """Seconds between looks at the progress queue while tasks run."""
 
 _events: Any = None
-"""In a pool worker: the queue to the owner (set by :func:`_init_worker`)."""
+"""In a pool worker: the pipe to the owner (set by :func:`_init_worker`)."""
 
 
 class SerialEngine(Engine):
@@ -95,7 +95,7 @@ class PoolEngine(Engine):
         On any exception the workers are ended at once (:func:`fmuid.engine.pool.local_pool`).
         """
         unreliable = get_simulator(model).reset_reliable is False
-        events = multiprocessing.get_context("forkserver").Queue()
+        events = multiprocessing.get_context("forkserver").SimpleQueue()
         initargs = (events, os.getpid(), model.file, unreliable)
         with local_pool(workers, _init_worker, initargs, preload=[__name__, *preload]) as pool:
             yield cls(pool, events, workers)
@@ -141,11 +141,8 @@ class PoolEngine(Engine):
         return [results[k] for k in range(len(tasks))]
 
     def _drain(self, on_event: OnEvent | None) -> None:
-        """Hand every event in the queue to ``on_event``."""
-        while True:
-            try:
-                k, event = self._events.get_nowait()
-            except queue.Empty:
-                return
+        """Hand every event in the pipe to ``on_event``."""
+        while not self._events.empty():
+            k, event = self._events.get()
             if on_event is not None:
                 on_event(k, event)

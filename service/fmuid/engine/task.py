@@ -71,8 +71,9 @@ class Engine(ABC):
             Called in this process with ``(index, result)`` for each finished task. If it
             raises, the tasks not started are cancelled and the error propagates.
         on_event
-            Called in this process with ``(index, event)`` for each event the task reports:
-            as it happens in this process or a local worker, when the task is back on dask.
+            Called in this process with ``(index, event)`` for each event the task reports,
+            in order and before its ``on_done``: as it happens in this process or a local
+            worker, when the task is back on dask.
 
         Returns
         -------
