@@ -213,8 +213,8 @@ def _walk_all(
     expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
     done: dict[tuple[int, int], int] = {}
 
-    def on_point(index: int, direction: int, n: int) -> None:
-        done[(index, direction)] = n
+    def on_point(k: int, n: int) -> None:
+        done[(tasks[k].index, tasks[k].direction)] = n
         if progress:
             per_branch = {
                 (t.index, t.direction): max(done.get((t.index, t.direction), 0), expected)
@@ -228,9 +228,6 @@ def _walk_all(
                 parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
             progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
 
-    def on_event(k: int, n: int) -> None:
-        on_point(tasks[k].index, tasks[k].direction, n)
-
     with open_engine(
         problem.model,
         workers=workers,
@@ -238,7 +235,7 @@ def _walk_all(
         at_most=len(tasks),
         preload=["fmuid.profiling.branch"],
     ) as engine:
-        results = engine.run(tasks, on_event=on_event)
+        results = engine.run(tasks, on_event=on_point)
     return results, sum(r.simulations for r in results)
 
 
