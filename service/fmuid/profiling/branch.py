@@ -263,3 +263,41 @@ def _rewalk(
     step = abs(good[-1].z[index] - good[-2].z[index]) or options.min_step
     more, better = walk(problem, good, chi2_hat, index, direction, threshold, step, options)
     return inner + [lower] + more, better
+
+
+@dataclass(frozen=True)
+class BranchTask:
+    """Everything a worker needs to walk one branch: a task of :mod:`fmuid.engine`."""
+
+    problem: Problem
+    z_hat: np.ndarray
+    chi2_hat: float
+    index: int
+    direction: int
+    threshold: float
+    sd_z: float
+    options: WalkOptions
+    pointwise: float | None = None
+    valleys: tuple[np.ndarray, ...] = ()
+    thorough: bool = False
+    seed: int = 0
+
+    def execute(self, report: Callable[[int], None]) -> BranchResult:
+        """Walk and settle the branch, calling ``report`` with the walk points done."""
+        thresholds = {"simultaneous": self.threshold}
+        if self.pointwise is not None:
+            thresholds["pointwise"] = self.pointwise
+        return settle_branch(
+            self.problem,
+            self.z_hat,
+            self.chi2_hat,
+            self.index,
+            self.direction,
+            thresholds,
+            self.sd_z,
+            self.options,
+            valleys=self.valleys,
+            thorough=self.thorough,
+            seed=self.seed,
+            on_point=report,
+        )

@@ -11,16 +11,16 @@ from typing import Any
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
+from fmuid.engine.run import open_engine
 from fmuid.estimation.optimize import FitOptions, jacobian, make_fit_result, refine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.estimation.space import z_to_value
 from fmuid.model.registry import fmu_summary
-from fmuid.profiling.branch import BranchResult
+from fmuid.profiling.branch import BranchResult, BranchTask
 from fmuid.profiling.checks import check_fit, distinct_valleys
 from fmuid.profiling.health import NOISY_FRACTION, check_health
 from fmuid.profiling.intervals import is_flat, label, noise_limited, open_reason, profile_noise
-from fmuid.profiling.parallel import BranchTask, run_branches
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
 from fmuid.profiling.structural import structural_check
@@ -213,8 +213,8 @@ def _walk_all(
     expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
     done: dict[tuple[int, int], int] = {}
 
-    def on_point(index: int, direction: int, n: int) -> None:
-        done[(index, direction)] = n
+    def on_point(k: int, n: int) -> None:
+        done[(tasks[k].index, tasks[k].direction)] = n
         if progress:
             per_branch = {
                 (t.index, t.direction): max(done.get((t.index, t.direction), 0), expected)
@@ -228,7 +228,14 @@ def _walk_all(
                 parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
             progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
 
-    results = run_branches(tasks, workers=workers, executor=executor, on_point=on_point)
+    with open_engine(
+        problem.model,
+        workers=workers,
+        executor=executor,
+        at_most=len(tasks),
+        preload=["fmuid.profiling.branch"],
+    ) as engine:
+        results = engine.run(tasks, on_event=on_point)
     return results, sum(r.simulations for r in results)
 
 
