@@ -8,6 +8,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from fmuid.engine.cluster import DaskEngine
+from fmuid.engine.count import CountingEngine
 from fmuid.engine.local import PoolEngine, SerialEngine
 from fmuid.engine.task import Engine
 from fmuid.model.fmu import FmuModel
@@ -24,6 +25,9 @@ def open_engine(
 ) -> Iterator[Engine]:
     """Yield the engine that runs tasks simulating ``model``; end its workers on leaving.
 
+    The tasks' simulations count in this process as their results come back
+    (:class:`~fmuid.engine.count.CountingEngine`).
+
     Parameters
     ----------
     model
@@ -39,13 +43,13 @@ def open_engine(
 
     """
     if executor is not None:
-        yield DaskEngine(executor, model)
+        yield CountingEngine(DaskEngine(executor, model))
         return
     n = workers or os.cpu_count() or 1
     if at_most is not None:
         n = min(n, at_most)
     if n <= 1:
-        yield SerialEngine()
+        yield CountingEngine(SerialEngine())
         return
     with PoolEngine.open(model, n, preload) as engine:
-        yield engine
+        yield CountingEngine(engine)
