@@ -86,7 +86,7 @@ class Run:
         self.opts = opts
         self.progress = progress
         self.count = count
-        self.t0 = self._t_lap = time.perf_counter()
+        self._t_lap = time.perf_counter()
         self._sims_lap = count.simulations
         self.stages: list[StageCost] = []
         self.done = 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -179,37 +179,45 @@ def check_health(
 
     """
     with counting() as count:
-        no_effect = ignored_parameters(problem, z_hat, jacobian)
-        fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
-        residuals = _Meter(problem, 2 + len(problem.names) * (4 + 2 * grid_side), progress)
-        r0 = residuals(z_hat)
-        deterministic = bool(np.array_equal(r0, residuals(z_hat)))
-        noise: dict[str, float] = {}
-        jumps: dict[str, int] = {}
-        chi2_noise: dict[str, float] = {}
-        steps = [PROBE_STEP]
-        lo, hi = problem.z_lower, problem.z_upper
-        with np.errstate(over="ignore", invalid="ignore"):  # outputs that overflow at wide bounds
-            for i, name in enumerate(problem.names):
-                scale = max(1.0, abs(float(z_hat[i])))
-                h = (
-                    PROBE_STEP
-                    * scale
-                    * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
-                )
-                rows = [r0] + [residuals(_moved(z_hat, i, k * h)) for k in range(1, 5)]
-                fourth = rows[0] - 4 * rows[1] + 6 * rows[2] - 4 * rows[3] + rows[4]
-                noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
-                slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
-                if noise[name] > 0 and slope > 0:
-                    steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
-                norm = float(np.linalg.norm(jacobian[:, i]))
-                d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
-                grid = np.clip(z_hat[i] + d * np.arange(-grid_side, grid_side + 1), lo[i], hi[i])
-                grid = np.unique(grid)
-                rows = [r0 if g == z_hat[i] else residuals(_at(z_hat, i, g)) for g in grid]
-                chi2 = np.array([float(r @ r) for r in rows])
-                jumps[name], chi2_noise[name] = _departures(grid, chi2)
+        health = _check(problem, z_hat, jacobian, progress, grid_side)
+    return replace(health, simulations=count.simulations)
+
+
+def _check(
+    problem: Problem,
+    z_hat: np.ndarray,
+    jacobian: np.ndarray,
+    progress: ProgressCallback | None,
+    grid_side: int,
+) -> Health:
+    """Run :func:`check_health`'s measurements (its simulations not counted here)."""
+    no_effect = ignored_parameters(problem, z_hat, jacobian)
+    fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
+    residuals = _Meter(problem, 2 + len(problem.names) * (4 + 2 * grid_side), progress)
+    r0 = residuals(z_hat)
+    deterministic = bool(np.array_equal(r0, residuals(z_hat)))
+    noise: dict[str, float] = {}
+    jumps: dict[str, int] = {}
+    chi2_noise: dict[str, float] = {}
+    steps = [PROBE_STEP]
+    lo, hi = problem.z_lower, problem.z_upper
+    with np.errstate(over="ignore", invalid="ignore"):  # outputs that overflow at wide bounds
+        for i, name in enumerate(problem.names):
+            scale = max(1.0, abs(float(z_hat[i])))
+            h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
+            rows = [r0] + [residuals(_moved(z_hat, i, k * h)) for k in range(1, 5)]
+            fourth = rows[0] - 4 * rows[1] + 6 * rows[2] - 4 * rows[3] + rows[4]
+            noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
+            slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
+            if noise[name] > 0 and slope > 0:
+                steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
+            norm = float(np.linalg.norm(jacobian[:, i]))
+            d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
+            grid = np.clip(z_hat[i] + d * np.arange(-grid_side, grid_side + 1), lo[i], hi[i])
+            grid = np.unique(grid)
+            rows = [r0 if g == z_hat[i] else residuals(_at(z_hat, i, g)) for g in grid]
+            chi2 = np.array([float(r @ r) for r in rows])
+            jumps[name], chi2_noise[name] = _departures(grid, chi2)
     return Health(
         deterministic=deterministic,
         reset_matches_fresh=fresh,
@@ -217,7 +225,6 @@ def check_health(
         jumps=jumps,
         chi2_noise=chi2_noise,
         diff_step=float(min(max(steps), MAX_DIFF_STEP)),
-        simulations=count.simulations,
         no_effect=no_effect,
     )
 
