@@ -9,6 +9,7 @@ held out, and a table is printed::
 Usage::
 
     python bench/real.py [--real ../shared/real] [--silverbox train4000|train] [--only silverbox]
+        [--workers N]
 
 The published figures are those the benchmarks' MODEL.md files quote (Silverbox: the linear
 model's free-run test error 7.07 mV on the multisine and 13.99 mV on the arrow, the Duffing
@@ -21,6 +22,7 @@ import argparse
 import importlib.util
 import json
 import logging
+import os
 import sys
 import tempfile
 import time
@@ -57,7 +59,7 @@ def _converter() -> object:
     return module
 
 
-def run(name: str, data: Path, estimation: str, out: Path) -> list[list[str]]:
+def run(name: str, data: Path, estimation: str, out: Path, workers: int) -> list[list[str]]:
     """Diagnose one benchmark; return its table rows and write its result JSON into ``out``."""
     model, spec_file, tests = STUDIES[name]
     if estimation == "silverbox_train.csv":  # the whole training set starts from the 4,000's fit
@@ -66,7 +68,7 @@ def run(name: str, data: Path, estimation: str, out: Path) -> list[list[str]]:
     train = load_experiment(data / estimation)
     held = [load_experiment(data / t) for t in tests]
     t0 = time.perf_counter()
-    result = diagnose(builtin_fmu(model), [train], spec, test_data=held).to_dict()
+    result = diagnose(builtin_fmu(model), [train], spec, test_data=held, workers=workers).to_dict()
     seconds = time.perf_counter() - t0
     (out / f"{name}.json").write_text(json.dumps(result, indent=1))
     named = ", ".join(e["label"] for e in result["effects"]) or str(result["effect"])
@@ -94,6 +96,9 @@ def main() -> None:
     parser.add_argument("--real", type=Path, default=ROOT.parent / "shared" / "real")
     parser.add_argument("--silverbox", default="train4000", choices=["train4000", "train"])
     parser.add_argument("--only", choices=list(STUDIES))
+    parser.add_argument(
+        "--workers", type=int, default=os.cpu_count() or 1, help="diagnosis worker processes"
+    )
     parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "fmuid-real")
     args = parser.parse_args()
     logging.basicConfig(level=logging.WARNING)
@@ -104,7 +109,7 @@ def main() -> None:
     estimation = {"silverbox": f"silverbox_{args.silverbox}.csv", "emps": "emps_estimation.csv"}
     rows = []
     for name in [args.only] if args.only else list(STUDIES):
-        rows += run(name, data, estimation[name], args.out)
+        rows += run(name, data, estimation[name], args.out, args.workers)
     header = [
         "benchmark",
         "samples",

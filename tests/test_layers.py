@@ -12,7 +12,8 @@ The layers, lowest first; a module may import its own layer and lower ones only:
       readable (how numbers read)
       < data
       < model
-      < formats (PEtab, SSV: read with the model's variables)
+      < formats (PEtab, SSV: read with the model's variables) / engine (runs tasks that simulate
+        a model: in this process, local workers or dask)
       < estimation
       < profiling
       < discrepancy / experiment_design
@@ -39,7 +40,7 @@ LAYERS = [
     {"fmuid", "errors", "progress", "frames", "provenance", "readable", "processes"},
     {"data"},
     {"model"},
-    {"formats"},
+    {"formats", "engine"},
     {"estimation"},
     {"profiling"},
     {"discrepancy", "experiment_design"},

@@ -122,7 +122,7 @@ def test_profile_on_dask_local_cluster_equals_local_pool(service_factory, step_c
         status = client.wait(job, timeout=600)
         assert status["status"] == "done", status
         assert_same_intervals(client.result(job), direct_profile)
-        assert "run_branch_anywhere" in cluster.scheduler.task_prefixes  # branches ran on dask
+        assert "BranchTask" in cluster.scheduler.task_prefixes  # branches ran on dask
 
 
 @pytest.mark.slow

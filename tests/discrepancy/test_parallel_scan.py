@@ -38,9 +38,19 @@ SPEC = spec_from_json(OFFSET_SPEC)
 
 
 def _comparable(result: dict) -> dict:  # type: ignore[type-arg]
-    """A result without what differs between runs (wall time, provenance)."""
+    """A result without what differs between runs (wall time, provenance); its stages' costs.
+
+    The stages' simulations and seconds sum to the total.
+    """
+    cost = result["cost"]
+    stages = cost["stages"]
+    assert sum(s["simulations"] for s in stages) == cost["simulations"]
+    assert sum(s["seconds"] for s in stages) == pytest.approx(
+        cost["seconds"], abs=1e-3 * len(stages)
+    )
     out = {k: v for k, v in result.items() if k not in ("cost", "provenance")}
-    return {**out, "simulations": result["cost"]["simulations"]}
+    per_stage = [(s["stage"], s["simulations"]) for s in stages]
+    return {**out, "simulations": cost["simulations"], "stages": per_stage}
 
 
 @pytest.mark.slow
@@ -52,6 +62,15 @@ def test_two_workers_give_the_same_diagnosis(msd_fmu: Path) -> None:
         results.append(_comparable(diagnose(msd_fmu, data, SPEC, options=opts).to_dict()))
     one, two = results
     assert one["mismatch"] and one["effect"] == "input_offset"
+    assert [name for name, _ in one["stages"]] == [
+        "base fit",
+        "scan",
+        "tests",
+        "forward selection",
+        "profiles",
+        "ties",
+        "validation",
+    ]
     lo, hi = one["added_parameters"]["offset_f"]["ci"]
     assert lo <= OFFSET <= hi
     assert one == two

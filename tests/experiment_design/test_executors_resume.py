@@ -3,19 +3,20 @@
 import pytest
 
 from design_cases import SMALL, Stop, comparable, counting, space_of, stop_after
-from fmuid.experiment_design import design, tasks
+from fmuid.engine.local import PoolEngine
+from fmuid.experiment_design import design
 
 
 @pytest.mark.slow
 def test_two_local_workers_give_the_serial_ranking_and_numbers(serial, msd_spec, monkeypatch):
     pools = []
-    run_pool = tasks._run_pool
+    run = PoolEngine.run
 
-    def spy(evaluate, todo, *args):
-        pools.append((len(todo), args[-2]))
-        return run_pool(evaluate, todo, *args)
+    def spy(engine, todo, **kwargs):
+        pools.append((len(todo), engine.workers))
+        return run(engine, todo, **kwargs)
 
-    monkeypatch.setattr(tasks, "_run_pool", spy)
+    monkeypatch.setattr(PoolEngine, "run", spy)
     events = []
     pooled = design("msd", msd_spec, space_of(**SMALL), workers=2, progress=events.append)
     assert pools == [(8, 2), (2, 2)]  # the screen and the verification on 2 processes

@@ -37,7 +37,7 @@ def build_quirk_fmu(name: str, out_dir: Path, layer: str | None = None) -> Path:
         return build_fmu(model_src_dir(), FMUS_SRC / name, out_dir)
     src = out_dir / "src"
     src.mkdir(exist_ok=True)
-    for item in ("model.h", "units.json"):
+    for item in ("model.h", "linear_step.h", "units.json"):
         shutil.copy(model_src_dir() / item, src / item)
     shutil.copy(model_src_dir() / "fmi2_cs.c", src / "fmi2_cs_shared.c")
     shutil.copy(FMUS_SRC / layer, src / "fmi2_cs.c")

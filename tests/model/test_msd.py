@@ -45,3 +45,37 @@ def test_step_response_matches_closed_form(
     x, v = step_response(m, k_total, b, 40.0, T_OUT)
     np.testing.assert_allclose(y[:, 0], x, rtol=0, atol=1e-8)
     np.testing.assert_allclose(y[:, 1], v, rtol=0, atol=1e-8)
+
+
+def test_linear_models_step_exactly_on_an_uneven_grid(msd_fmu) -> None:
+    """The msd is stepped by its matrix exponential: a ramping, reversing force read at uneven
+    times agrees with a tight scipy solution to 1e-10, and the step response to rounding."""
+    from scipy.integrate import solve_ivp
+
+    t_in = np.array([0.0, 0.7, 1.3, 2.9, 4.0])
+    f_in = np.array([0.0, 30.0, -12.0, 5.0, 5.0])
+    t_out = np.unique(np.r_[np.linspace(0.0, 4.0, 37), 0.013, 1.0001, 3.333])
+    m, k, b = 1.1, 4.4, 1.6
+
+    def rhs(t: float, s: np.ndarray) -> list[float]:
+        return [s[1], (np.interp(t, t_in, f_in) - b * s[1] - k * s[0]) / m]
+
+    ref = solve_ivp(
+        rhs,
+        (0.0, 4.0),
+        [0.0, 0.0],
+        t_eval=t_out,
+        rtol=1e-13,
+        atol=1e-14,
+        method="DOP853",
+        first_step=1e-4,
+        max_step=0.01,
+    )
+    sim = Simulator(msd_fmu)
+    try:
+        y = sim.simulate({}, t_in, {"f": f_in}, t_out, ["x", "v"])
+        step = sim.simulate({}, np.array([0.0, 10.0]), {"f": np.array([40.0, 40.0])}, T_OUT, ["x"])
+    finally:
+        sim.close()
+    np.testing.assert_allclose(y.T, ref.y, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(step[:, 0], step_response(m, k, b, 40.0, T_OUT)[0], atol=1e-12)

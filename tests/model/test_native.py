@@ -59,6 +59,7 @@ def test_native_loop_equals_the_python_loop(request: pytest.FixtureRequest, name
 
 
 def test_native_loop_raises_the_python_loops_errors(msd_fmu: Path) -> None:
+    """An input the FMU refuses, and a step whose state overflows (a light undamped mass)."""
     step_t = np.array([0.0, 1.0, 1.0, 4.0])
     cases = {
         np.inf: r"fmi2SetReal returned fmi2Error for the inputs at t = 1\.0 s",
@@ -72,7 +73,8 @@ def test_native_loop_raises_the_python_loops_errors(msd_fmu: Path) -> None:
             sim: Simulator = sim, bad: float = bad, where: str = where, messages: list = messages
         ) -> np.ndarray:
             with pytest.raises(FmuError, match=where) as caught, np.errstate(invalid="ignore"):
-                sim.simulate({}, step_t, {"f": np.array([0.0, 0.0, bad, bad])}, T, ["x"])
+                f = np.array([0.0, 0.0, bad, bad])
+                sim.simulate({"m": 1e-3, "b": 0.0}, step_t, {"f": f}, T, ["x"])
             messages.append(str(caught.value))
             return np.zeros(1)
 

@@ -1,14 +1,16 @@
 """Profile branches on a dask.distributed cluster give the local pool's intervals."""
 
+import pickle
 import shutil
 
 import numpy as np
 import pytest
 
 import fmuid
+from fmuid.engine.cluster import PickledTask, execute_anywhere
 from fmuid.estimation.optimize import fit_problem
+from fmuid.profiling.branch import BranchTask
 from fmuid.profiling.engine import thresholds
-from fmuid.profiling.parallel import BranchTask, run_branch_anywhere
 from fmuid.profiling.walk import WalkOptions
 from fmuid.stages import make_problem
 
@@ -48,7 +50,9 @@ def test_branch_runs_from_fmu_bytes_when_the_file_is_not_there(msd_fmu, tmp_path
     task = BranchTask(
         problem, fit.z_estimate(), fit.chi2, 0, 1, thr, fit.fisher_sd_z()["m"], WalkOptions()
     )
-    result = run_branch_anywhere(task, problem.model.sha256, blob)
+    sent = PickledTask(problem.model.file, pickle.dumps(task))
+    result, walked = execute_anywhere(sent, problem.model.sha256, blob)
+    assert walked == sorted(walked) and walked[-1] >= 3  # the progress comes back with it
     assert len(result.points) >= 3
     assert all(p.error is None for p in result.points)
     assert result.points[-1].chi2 - fit.chi2 > thr

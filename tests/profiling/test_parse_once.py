@@ -14,11 +14,12 @@ import numpy as np
 import pytest
 
 import fmuid
+from fmuid.engine.cluster import PickledTask, execute_anywhere
 from fmuid.estimation.optimize import fit_problem
 from fmuid.jobs.store import Dataset, JobStore
 from fmuid.model.fmu import FmuModel
+from fmuid.profiling.branch import BranchTask
 from fmuid.profiling.engine import thresholds
-from fmuid.profiling.parallel import BranchTask, PickledTask, run_branch, run_branch_anywhere
 from fmuid.profiling.walk import WalkOptions
 from fmuid.stages import make_problem
 
@@ -108,13 +109,13 @@ def test_a_worker_without_the_file_parses_a_copy_of_the_bytes(msd_fmu, tmp_path,
         problem, fit.z_estimate(), fit.chi2, 0, 1, thr, fit.fisher_sd_z()["m"], WalkOptions()
     )
     sent = PickledTask(problem.model.file, pickle.dumps(task))
-    here = run_branch(task)
+    here = task.execute(lambda n: None)
     blob = moved.read_bytes()
     moved.unlink()
     monkeypatch.setattr("fmuid.model.fmu._LOADED", {})  # a worker that has parsed nothing yet
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     before = FmuModel.parses
-    there = run_branch_anywhere(sent, problem.model.sha256, blob)
+    there, _ = execute_anywhere(sent, problem.model.sha256, blob)
     assert FmuModel.parses - before == 1
     assert (tmp_path / "fmuid-fmus" / problem.model.sha256 / "moved.fmu").read_bytes() == blob
     assert [p.chi2 for p in there.points] == [p.chi2 for p in here.points]

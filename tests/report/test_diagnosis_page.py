@@ -73,6 +73,14 @@ class _Unexplained:
             "units": {"k": "N/m", "x": "m"},
             "whiteness_before": {"a.csv/x": 1e-8},
             "whiteness_after": {"a.csv/x": 1e-8},
+            "cost": {
+                "simulations": 12,
+                "seconds": 1.75,
+                "stages": [
+                    {"stage": "scan", "simulations": 10, "seconds": 1.25},
+                    {"stage": "forward selection", "simulations": 2, "seconds": 0.5},
+                ],
+            },
         }
 
 
@@ -84,6 +92,7 @@ def test_no_python_literal_reaches_the_page_and_units_show(tmp_path):
     assert re.search(r"k\s+N/m\s+4\.4\s+4\.4", body)
     assert "0.8 Hz, damping ratio 0.1" in body
     assert "tau_outputs = 0.1" in body and "bias_x = 0.1" in body
+    assert re.search(r"scan\s+10\s+.+forward selection\s+2\s+.+total\s+12\s", body)
 
 
 def test_fmt_writes_mappings_and_lists_as_text():

@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import jsonschema
 import pytest
 
+from fmuid.discrepancy.result import Diagnosis, StageCost
 from fmuid.errors import SpecError
 from fmuid.estimation.result import SCHEMA_VERSION, Cost
 from fmuid.experiment_design.result import DesignResult, RankedDesign
@@ -111,12 +113,18 @@ def small_design() -> DesignResult:
     )
 
 
+def small_diagnosis() -> Diagnosis:
+    """The contract's diagnosis with the cost of its steps."""
+    stages = (StageCost("scan", 10, 1.25), StageCost("profiles", 2, 0.5))
+    return replace(result_from_dict(CONTRACT_DIAGNOSIS), cost=Cost(12, 1.75), stages=stages)
+
+
 def written(kind: str) -> dict[str, Any]:
     """The JSON of a small result of ``kind`` as ``fmuid`` writes it (``allow_nan=False``)."""
     result = {
         "fit": toy_fit,
         "profile": toy_profile_result,
-        "diagnose": lambda: result_from_dict(CONTRACT_DIAGNOSIS),
+        "diagnose": small_diagnosis,
         "design": small_design,
     }[kind]()
     return json.loads(json.dumps(result.to_dict(), allow_nan=False))

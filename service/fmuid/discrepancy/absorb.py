@@ -69,8 +69,8 @@ def absorbed(
     augmented_fit: FitResult,
     workers: int,
     walk: WalkOptions,
-) -> tuple[dict[str, Any], int]:
-    """Profile the original parameters before and after; return the comparison and its cost.
+) -> dict[str, Any]:
+    """Profile the original parameters before and after; return the comparison.
 
     ``augmented`` must be set at the study's confidence (its added parameters are free but not
     profiled).
@@ -78,6 +78,4 @@ def absorbed(
     names = list(base.names)
     before = profile_problem(base, base_fit, workers=workers, options=walk)
     after = profile_problem(augmented, augmented_fit, only=names, workers=workers, options=walk)
-    sims = before.cost.simulations - base_fit.cost.simulations
-    sims += after.cost.simulations - augmented_fit.cost.simulations
-    return compare(before, after, names), sims
+    return compare(before, after, names)

@@ -81,6 +81,15 @@ class AugmentedPredictor:
             self._grids[id(experiment)] = cached
         return cached[1], cached[2]
 
+    def _input_grid(self, experiment: Experiment, input_time: np.ndarray) -> np.ndarray:
+        """Return the fine grid joined with the input samples (kept per experiment)."""
+        key = -id(experiment)
+        cached = self._grids.get(key)
+        if cached is None or cached[0] is not experiment:
+            cached = (experiment, np.union1d(input_time, self._fine(experiment)[0]), input_time)
+            self._grids[key] = cached
+        return cached[1]
+
     @property
     def fine_inputs(self) -> bool:
         """Whether the inputs go to the FMU on the fine grid even when no effect changes them.
@@ -101,7 +110,7 @@ class AugmentedPredictor:
         fine = self.fine_inputs
         if not acting and not fine:
             return input_time, dict(inputs)
-        grid = np.union1d(input_time, self._fine(experiment)[0])
+        grid = self._input_grid(experiment, input_time)
         start = grid if fine else input_time
         times = {name: start for name in inputs}
         values = {name: np.interp(start, input_time, v) for name, v in inputs.items()}
@@ -115,6 +124,8 @@ class AugmentedPredictor:
             if t is not grid:
                 t, u = grid, np.interp(grid, t, u)
             times[e.target], values[e.target] = t, e.on_input(t, u, params)
+        if all(t is grid for t in times.values()):
+            return grid, values
         common = np.unique(np.concatenate(list(times.values())))
         return common, {n: np.interp(common, times[n], v) for n, v in values.items()}
 

@@ -38,6 +38,7 @@ import numpy as np
 from fmuid.data import ParameterSpec
 from fmuid.discrepancy import effects as fx
 from fmuid.discrepancy.knowledge import AddedParameter, ModelKnowledge, model_knowledge
+from fmuid.engine.count import counted
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
 from fmuid.model.registry import get_simulator
@@ -312,8 +313,7 @@ def signals(
             sizes[source] = float(np.quantile(np.abs(np.concatenate(per)), 0.95)) if per else 1.0
             continue
         exp = problem.experiments[0]
-        y = problem.predictor.predict(values, exp, [source])
-        problem.simulations += 1
+        y = problem.simulate(values, exp, [source])
         sizes[source] = float(np.max(np.abs(y)))
     interval = float(np.median(gaps[gaps > 0])) if np.any(gaps > 0) else 1.0
     rate_sizes = {k: max(v, 1e-12) for k, v in sizes.items()}
@@ -348,7 +348,7 @@ def undriven_sizes(problem: Problem, values: Mapping[str, float]) -> dict[str, f
             exp.time,
             problem.outputs,
         )
-        problem.simulations += 2
+        counted(2)
         ratios = []
         for j in range(len(problem.outputs)):
             if mask[j].sum() < 2:

@@ -48,6 +48,7 @@ from fmuid.discrepancy.scan import CandidateFit, augmented
 from fmuid.discrepancy.settle import settles, settling_tests
 from fmuid.discrepancy.tasks import candidate_pool
 from fmuid.discrepancy.validate import coupling_error, validation
+from fmuid.engine.count import counting
 from fmuid.estimation.optimize import (
     FitOptions,
     fit_problem,
@@ -200,8 +201,8 @@ def diagnose_problem(
     common = augmented(problem, [])
     if common.predictor is not problem.predictor:
         problem, fit = common, None if fit is None else refit(common, fit)
-    with candidate_pool(problem, options.workers, executor) as mapper:
-        run = Run(problem, options, progress, mapper, executor)
+    with candidate_pool(problem, options.workers, executor) as mapper, counting() as count:
+        run = Run(problem, options, progress, count, mapper, executor)
         return _diagnose(run, fit, test_data)
 
 
@@ -212,8 +213,10 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)
     cands = study_catalogue(problem, fit.estimates)
     run.total = 3 * len(cands) + 5
+    run.lap("base fit")
     # 1-2. locate and scan
     fit, scanner, fits, adjusted = scan_base(run, fit, cands)
+    run.lap("scan")
     tests_before = locate.residual_tests(problem, fit)
     agreement = locate.experiments_disagree(problem, fit, opts.agreement_nfev)
     model = local_model(problem, scanner.z, scanner.jac)
@@ -245,7 +248,10 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         "scan_p_value": scan_test.p_value,
         "units": dict(fit.units),
     }
+    run.lap("tests")
     if not evidence:
+        checked = validation(base_model, test_data)
+        cost, stages = run.finish("validation")
         return Diagnosis(
             mismatch=False,
             tests_after=tuple(tests_before),
@@ -257,15 +263,16 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
             lrt_p_value=None,
             bic_after=bic_before,
             parameters_after=dict(fit.estimates),
-            validation=tuple(validation(base_model, test_data)),
-            cost=run.cost(),
+            validation=tuple(checked),
+            cost=cost,
+            stages=stages,
             **common,
         )
     # 4. add effects while a round's best candidate is significant
     seed_after = problem.spec.seed + 1
 
     def misfit_left(f: CandidateFit) -> bool:
-        fitted = fit_of(f.problem, f.z, f.chi2, run.t0)
+        fitted = fit_of(f.problem, f.z, f.chi2)
         return bool(rt.holm(_tests_after(f.problem, fitted, seed_after), opts.alpha))
 
     steps, scored = forward(
@@ -273,8 +280,11 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     )
     scores = [score(f, a) for f, a in scored]
     if not steps:
+        run.lap("forward selection")
         correction = _correction(problem, fit.estimates, generic, pole)
         run.report("generic correction")
+        checked = validation(base_model, test_data)
+        cost, stages = run.finish("validation")
         worst = min(tests_before, key=lambda t: t.p_value) if tests_before else None
         return Diagnosis(
             mismatch=True,
@@ -288,19 +298,20 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
             bic_after=bic_before,
             parameters_after=dict(fit.estimates),
             generic_correction=correction,
-            validation=tuple(validation(base_model, test_data)),
-            cost=run.cost(),
+            validation=tuple(checked),
+            cost=cost,
+            stages=stages,
             **common,
         )
     best = steps[0].fit
     applied = [s.effect for s in steps]
     aug, z = steps[-1].fit.problem, steps[-1].fit.z
-    final_fit = fit_of(aug, z, steps[-1].fit.chi2, run.t0)
+    final_fit = fit_of(aug, z, steps[-1].fit.chi2)
     tests_after = _tests_after(aug, final_fit, seed_after)
     run.report("tests of the augmented model")
+    run.lap("forward selection")
     # 5. profile the added parameters, then the original ones before and after
     added = [p for c in applied for p in c.parameters]
-    before = run.track(aug)
     prof = profile_problem(
         aug,
         final_fit,
@@ -310,17 +321,16 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         confidence=opts.ci_confidence,
         executor=run.executor,
     )
-    run.profiled(before, prof.cost.simulations - final_fit.cost.simulations)
     final_fit = prof.fit
     estimates = added_estimates(prof, added, opts.ci_confidence)
     run.report("profiles of the added parameters")
+    run.lap("profiles")
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:
         at_study = augmented(problem, applied)
-        before = run.track(at_study)
-        absorbed_by, sims = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
-        run.profiled(before, sims)
+        absorbed_by = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
         run.report("profiles of the original parameters before and after")
+        run.lap("absorbed")
     common["location"] = {
         **locate.effect_location(
             locate.residual_series(problem, fit.estimates),
@@ -340,6 +350,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     proposal = max(filter(settles, tests), key=lambda d: d.expected_chi2, default=None)
     if tests:
         run.report("tests that would settle the ties")
+    run.lap("ties")
     coupling = coupling_error(aug, final_fit.estimates)
     models = [*base_model, *((s.fit.problem, s.fit.problem.from_z(s.fit.z)) for s in steps[:-1])]
     checked = validation([*models, (aug, dict(final_fit.estimates))], test_data)
@@ -349,6 +360,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     residuals_pass = not rt.holm(tests_after, opts.alpha)
     effect_steps = _steps(steps, estimates, coupling)
     leftover = None if residuals_pass else _correction(aug, final_fit.estimates, None, None)
+    cost, stages = run.finish("validation")
     return Diagnosis(
         mismatch=True,
         tests_after=tuple(tests_after),
@@ -379,6 +391,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         generic_correction=leftover,
         effects=effect_steps,
         validation=tuple(checked),
-        cost=run.cost(),
+        cost=cost,
+        stages=stages,
         **common,
     )

@@ -31,6 +31,7 @@ over ``d >= 0`` (``C``: the pinned sensitivities of the weighted predictions, si
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,6 +52,10 @@ OCTAVE = 2.0
 
 NAME = "generic_error_model"
 """The test's name in the decision family."""
+
+KEPT = 64
+"""Laguerre filter banks kept per process (:func:`laguerre`)."""
+_KEPT: dict[tuple[float, int, str], np.ndarray] = {}
 
 
 @dataclass(frozen=True)
@@ -112,7 +117,24 @@ def filtered(num: np.ndarray, den: np.ndarray, u: np.ndarray, time: np.ndarray) 
 
 
 def laguerre(pole_hz: float, time: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Return the first :data:`ORDER` Laguerre filters of ``u`` (linear between samples)."""
+    """Return the first :data:`ORDER` Laguerre filters of ``u`` (linear between samples).
+
+    Kept per pole, time and input (the last :data:`KEPT` of them): every fit of a diagnosis
+    (the base fit and each augmented one) is tested on the same inputs.
+    """
+    digest = hashlib.blake2b(np.ascontiguousarray(time).tobytes(), digest_size=16)
+    digest.update(np.ascontiguousarray(u, dtype=float).tobytes())
+    key = (float(pole_hz), time.size, digest.hexdigest())
+    kept = _KEPT.get(key)
+    if kept is None:
+        kept = _KEPT[key] = _laguerre(pole_hz, time, u)
+        kept.setflags(write=False)
+        if len(_KEPT) > KEPT:
+            _KEPT.pop(next(iter(_KEPT)))
+    return kept
+
+
+def _laguerre(pole_hz: float, time: np.ndarray, u: np.ndarray) -> np.ndarray:
     p = 2.0 * np.pi * pole_hz
     num, den = np.array([np.sqrt(2.0 * p)]), np.array([1.0, p])
     out = []

@@ -113,7 +113,6 @@ def experiments_disagree(problem: Problem, fit: FitResult, max_nfev: int) -> rt.
         )
         _, chi2, _ = refine(one, z0, options=FitOptions(ftol=1e-8, max_nfev=max_nfev))
         separate += chi2
-        problem.simulations += one.simulations
     stat = max(fit.chi2 - separate, 0.0)
     df = (len(problem.experiments) - 1) * problem.n_free
     p = float(stats.chi2.sf(stat, df))

@@ -177,6 +177,19 @@ class EffectStep:
 
 
 @dataclass(frozen=True)
+class StageCost:
+    """What one step of a diagnosis cost: FMU simulations and wall time in seconds."""
+
+    stage: str
+    simulations: int
+    seconds: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON form ``{"stage": ..., "simulations": ..., "seconds": ...}``."""
+        return {"stage": self.stage, **Cost(self.simulations, self.seconds).to_dict()}
+
+
+@dataclass(frozen=True)
 class Diagnosis:
     """Outcome of ``fmuid.diagnose``: is there a mismatch, where, what explains it.
 
@@ -209,6 +222,8 @@ class Diagnosis:
     scan_p_value: float | None = None
     fmu: dict[str, str] = field(default_factory=dict)
     cost: Cost = Cost(0, 0.0)
+    stages: tuple[StageCost, ...] = ()
+    """The cost of each step, in order (they sum to ``cost``; none in results of before 2026-11)."""
     units: dict[str, str] = field(default_factory=dict)
     discriminating_experiment: dict[str, Any] | None = None
     effects: tuple[EffectStep, ...] = ()
@@ -264,7 +279,7 @@ class Diagnosis:
             "tests_before": [t.to_dict() for t in self.tests_before],
             "tests_after": [t.to_dict() for t in self.tests_after],
             "generic_correction": self.generic_correction,
-            "cost": self.cost.to_dict(),
+            "cost": {**self.cost.to_dict(), "stages": [s.to_dict() for s in self.stages]},
             "units": dict(self.units),
             "discriminating_experiment": self.discriminating_experiment,
             "effects": [e.to_dict() for e in self.effects],

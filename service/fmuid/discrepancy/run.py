@@ -1,4 +1,4 @@
-"""The state of one diagnosis and its scan rounds: options, progress, simulations spent."""
+"""The state of one diagnosis and its scan rounds: options, progress, the cost of each stage."""
 
 from __future__ import annotations
 
@@ -13,8 +13,9 @@ import numpy as np
 from fmuid.discrepancy import decide
 from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.knowledge import AddedParameter
-from fmuid.discrepancy.result import AddedEstimate, CandidateScore
+from fmuid.discrepancy.result import AddedEstimate, CandidateScore, StageCost
 from fmuid.discrepancy.scan import CandidateFit, Mapper, Scanner, scan, serial
+from fmuid.engine.count import Count, counting
 from fmuid.estimation.optimize import jacobian, make_fit_result, refine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
@@ -28,9 +29,13 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
-def fit_of(problem: Problem, z: np.ndarray, chi2: float, t0: float) -> FitResult:
-    """Return a fit result at ``z`` (its Jacobian computed here)."""
-    return make_fit_result(problem, z, chi2, jacobian(problem, z), "", False, t0, 0)
+def fit_of(problem: Problem, z: np.ndarray, chi2: float) -> FitResult:
+    """Return a fit result at ``z`` (its Jacobian computed here, its cost)."""
+    t0 = time.perf_counter()
+    with counting() as count:
+        jac = jacobian(problem, z)
+    cost = Cost(count.simulations, time.perf_counter() - t0)
+    return make_fit_result(problem, z, chi2, jac, "", False, cost)
 
 
 def score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
@@ -61,13 +66,18 @@ def added_estimates(
 
 
 class Run:
-    """State of one diagnosis: the problem, options, progress and the simulations spent."""
+    """State of one diagnosis: the problem, options, progress and the cost of each stage.
+
+    ``count`` is open around the whole diagnosis (:func:`fmuid.engine.count.counting`): it
+    counts what this process simulates and the counts of the tasks run elsewhere.
+    """
 
     def __init__(
         self,
         problem: Problem,
         opts: DiagnoseOptions,
         progress: ProgressCallback | None,
+        count: Count,
         mapper: Mapper = serial,
         executor: Any = None,
     ):
@@ -76,17 +86,18 @@ class Run:
         self.executor = executor
         self.opts = opts
         self.progress = progress
-        self.t0 = time.perf_counter()
-        self.sims0 = problem.simulations
-        self.made: dict[int, Problem] = {}
-        self.extra = 0
+        self.count = count
+        self._t_lap = time.perf_counter()
+        self._sims_lap = count.simulations
+        self.stages: list[StageCost] = []
         self.done = 0
         self.total = 1
 
-    def spent(self) -> int:
-        """Return the simulations spent so far, in every problem made."""
-        made = sum(p.simulations for p in self.made.values())
-        return self.problem.simulations - self.sims0 + made + self.extra
+    def lap(self, stage: str) -> None:
+        """Close ``stage``: what was spent since the previous stage closed (or the start)."""
+        now, sims = time.perf_counter(), self.count.simulations
+        self.stages.append(StageCost(stage, sims - self._sims_lap, now - self._t_lap))
+        self._t_lap, self._sims_lap = now, sims
 
     def report(self, detail: str) -> None:
         """Count a stage done and tell the progress callback."""
@@ -100,7 +111,6 @@ class Run:
         """Scan a pool of candidates on a scanner; return the fits and min-P adjusted p."""
 
         def seen(f: CandidateFit) -> None:
-            self.made[id(f.problem)] = f.problem
             self.report(f"round {stage}: {f.candidate.label} chi2 {f.chi2:.4g}")
 
         fits = scan(
@@ -116,28 +126,16 @@ class Run:
         own, adjusted = decide.calibrate(fits, self.problem.spec.seed + stage)
         return [replace(f, p_value=p) for f, p in zip(fits, own)], adjusted
 
-    def track(self, problem: Problem) -> int:
-        """Count ``problem``'s simulations from now on; return :meth:`spent` so far."""
-        self.made[id(problem)] = problem
-        return self.spent()
-
-    def profiled(self, before: int, total: int) -> None:
-        """Count the simulations of profiles that cost ``total`` since :meth:`spent` was ``before``.
-
-        What this process simulated is counted by the problems already; the rest ran in worker
-        processes or on dask workers.
-        """
-        self.extra += max(total - (self.spent() - before), 0)
-
-    def cost(self) -> Cost:
-        """Return the simulations and seconds spent."""
-        return Cost(self.spent(), time.perf_counter() - self.t0)
+    def finish(self, stage: str) -> tuple[Cost, tuple[StageCost, ...]]:
+        """Close the last stage; return the total cost and the stages' (they sum to it)."""
+        self.lap(stage)
+        sims = sum(s.simulations for s in self.stages)
+        return Cost(sims, sum(s.seconds for s in self.stages)), tuple(self.stages)
 
 
 def tie_intervals(run: Run, tie: CandidateFit) -> dict[str, object]:
     """Profile-likelihood intervals of an equally good candidate's added parameters."""
-    tie_fit = fit_of(tie.problem, tie.z, tie.chi2, time.perf_counter())
-    before = run.track(tie.problem)
+    tie_fit = fit_of(tie.problem, tie.z, tie.chi2)
     prof = profile_problem(
         tie.problem,
         tie_fit,
@@ -147,7 +145,6 @@ def tie_intervals(run: Run, tie: CandidateFit) -> dict[str, object]:
         options=run.opts.walk,
         confidence=run.opts.ci_confidence,
     )
-    run.profiled(before, prof.cost.simulations - tie_fit.cost.simulations)
     estimates = added_estimates(prof, tie.candidate.parameters, run.opts.ci_confidence)
     return {name: e.to_dict() for name, e in estimates.items()}
 
@@ -159,7 +156,7 @@ def recheck_base(run: Run, fit: FitResult, best: CandidateFit) -> FitResult | No
     z, chi2, _ = refine(run.problem, start, options=run.opts.fit)
     if chi2 < fit.chi2 - 1e-6 * max(1.0, fit.chi2):
         log.info("base fit improved from %.6g to %.6g by a candidate's start", fit.chi2, chi2)
-        return fit_of(run.problem, z, chi2, time.perf_counter())
+        return fit_of(run.problem, z, chi2)
     return None
 
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from fmuid.data import Experiment
 from fmuid.discrepancy.augment import AugmentedPredictor
+from fmuid.engine.count import counted
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.validation import held_out_rms
 
@@ -33,7 +34,7 @@ def validation(
         found = held_out_rms(
             problem.predictor, values, experiments, problem.outputs, settle=problem.spec.settle
         )
-        problem.simulations += len(experiments)
+        counted(len(experiments))
         runs.append({(e.experiment, e.output): e for e in found})
     return [
         entry.with_steps([run[key].rms_base for run in runs]).to_dict()
@@ -56,9 +57,8 @@ def coupling_error(problem: Problem, values: Mapping[str, float]) -> float | Non
     half = AugmentedPredictor(predictor.base, predictor.effects, predictor.step_scale / 2)
     worst = 0.0
     for i, exp in enumerate(problem.experiments):
-        a = predictor.predict(dict(values), exp, problem.outputs)
-        b = half.predict(dict(values), exp, problem.outputs)
-        problem.simulations += 2
+        a = problem.simulate(dict(values), exp)
+        b = problem.simulate(dict(values), exp, predictor=half)
         for j, o in enumerate(problem.outputs):
             mask = problem.masks[i][j]
             if mask.any():

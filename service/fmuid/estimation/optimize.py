@@ -13,6 +13,7 @@ from pymoo.core.problem import Problem as PymooProblem
 from pymoo.optimize import minimize as pymoo_minimize
 from scipy.optimize import least_squares, minimize
 
+from fmuid.engine.count import Count, counting
 from fmuid.errors import FitError, FmuError
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
@@ -218,7 +219,21 @@ def fit_problem(
 
     """
     t0 = time.perf_counter()
-    sims0 = problem.simulations
+    with counting() as count:
+        z, chi2, message, jac = _best_fit(problem, start, global_search, seed, options, progress)
+    cost = Cost(count.simulations, time.perf_counter() - t0)
+    return make_fit_result(problem, z, chi2, jac, message, global_search, cost)
+
+
+def _best_fit(
+    problem: Problem,
+    start: Mapping[str, float] | None,
+    global_search: bool,
+    seed: int,
+    options: FitOptions,
+    progress: ProgressCallback | None,
+) -> tuple[np.ndarray, float, str, np.ndarray]:
+    """Refine from each start (the global search's best first); return the best and its Jacobian."""
     z_start = problem.to_z(start) if start is not None else problem.to_z_array(problem.start)
     starts = [z_start]
     if global_search:
@@ -226,9 +241,11 @@ def fit_problem(
     best: tuple[np.ndarray, float, str] | None = None
     errors = []
     for k, z0 in enumerate(starts, 1):
-        report = RefineProgress(progress, problem, f"start {k}/{len(starts)}") if progress else None
         try:
-            z, chi2, message = refine(problem, z0, options=options, on_residuals=report)
+            with counting() as runs:
+                label = f"start {k}/{len(starts)}"
+                report = RefineProgress(progress, label, runs) if progress else None
+                z, chi2, message = refine(problem, z0, options=options, on_residuals=report)
         except (FmuError, FitError) as exc:
             errors.append(str(exc))
             continue
@@ -237,24 +254,24 @@ def fit_problem(
     if best is None:
         raise FitError(f"the fit failed: {'; '.join(errors)}")
     z, chi2, message = best
-    jac = jacobian(problem, z)
-    return make_fit_result(problem, z, chi2, jac, message, global_search, t0, sims0)
+    return z, chi2, message, jacobian(problem, z)
 
 
 class RefineProgress:
     """Report the trust-region refinement: evaluations, best chi2 and simulations so far.
 
+    ``runs`` is the count open around the refinement.
+
     Its events are stage ``"refine"`` with ``total`` 0 (the number of evaluations is not known
     ahead), at most one every 0.5 s.
     """
 
-    def __init__(self, progress: ProgressCallback, problem: Problem, label: str):
+    def __init__(self, progress: ProgressCallback, label: str, runs: Count):
         self.progress = progress
-        self.problem = problem
         self.label = label
+        self.runs = runs
         self.evaluations = 0
         self.best = float("inf")
-        self.runs0 = problem.simulations
         self.last = 0.0
 
     def __call__(self, residuals: np.ndarray) -> None:
@@ -264,8 +281,7 @@ class RefineProgress:
         now = time.monotonic()
         if now - self.last >= 0.5:
             self.last = now
-            runs = self.problem.simulations - self.runs0
-            detail = f"{self.label}, chi2 {self.best:.4g}, {runs} simulations"
+            detail = f"{self.label}, chi2 {self.best:.4g}, {self.runs.simulations} simulations"
             self.progress(Progress("refine", self.evaluations, 0, detail))
 
 
@@ -292,10 +308,9 @@ def make_fit_result(
     jac: np.ndarray,
     message: str,
     global_search: bool,
-    t0: float,
-    sims0: int,
+    cost: Cost,
 ) -> FitResult:
-    """Assemble a ``FitResult`` for the point ``z`` of ``problem``."""
+    """Assemble a ``FitResult`` for the point ``z`` of ``problem``, which cost ``cost``."""
     return FitResult(
         fmu_sha256=problem.model.sha256,
         model_name=problem.model.model_name,
@@ -312,7 +327,7 @@ def make_fit_result(
         fixed=dict(problem.spec.fixed),
         global_search=global_search,
         message=message,
-        cost=Cost(problem.simulations - sims0, time.perf_counter() - t0),
+        cost=cost,
         fmu_info=fmu_summary(problem.model),
         units=problem.units(),
     )

@@ -9,6 +9,7 @@ import numpy as np
 
 from fmuid.data import Experiment, ParameterSpec, Spec, used_inputs
 from fmuid.data.checks import settled_rows
+from fmuid.engine.count import counted
 from fmuid.errors import DataError, FmuError
 from fmuid.estimation.predictor import FmuPredictor, Predictor
 from fmuid.estimation.sigma import SPLINE_METHOD, spline_residual_sigma
@@ -21,7 +22,8 @@ class Problem:
 
     Parameters are fitted in the coordinates ``z`` of its :class:`ParameterSpace` (``space``):
     ``log10(value)`` for log-scaled parameters (the default when the lower bound is positive)
-    and the value itself otherwise.
+    and the value itself otherwise. Each simulation counts in the counts open
+    (:func:`fmuid.engine.count.counting`).
 
     Parameters
     ----------
@@ -109,7 +111,6 @@ class Problem:
         if self.n_data == 0:
             after = f" after the {spec.settle:g} s settle window" if spec.settle else ""
             raise DataError(f"no output samples to fit in any experiment{after}")
-        self.simulations = 0
 
     @property
     def n_free(self) -> int:
@@ -167,9 +168,34 @@ class Problem:
         out = []
         for exp in self.experiments:
             y = self.predictor.predict(params, exp, self.outputs)
-            self.simulations += 1
+            counted()
             out.append({o: y[:, j] for j, o in enumerate(self.outputs)})
         return out
+
+    def simulate(
+        self,
+        values: Mapping[str, float],
+        experiment: Experiment,
+        outputs: Sequence[str] | None = None,
+        predictor: Predictor | None = None,
+    ) -> np.ndarray:
+        """Simulate one experiment and count it; return the outputs, one column each.
+
+        Parameters
+        ----------
+        values
+            Parameter values handed to the predictor as they are.
+        experiment
+            The experiment whose inputs and times are simulated.
+        outputs
+            The outputs to return; default the problem's.
+        predictor
+            Another predictor of this problem's model (e.g. on a finer grid); default its own.
+
+        """
+        y = (predictor or self.predictor).predict(values, experiment, outputs or self.outputs)
+        counted()
+        return y
 
     def residuals(self, z: np.ndarray) -> np.ndarray:
         """Weighted residuals ``(y_data - y_model) / sigma`` of every fitted sample.
@@ -184,7 +210,7 @@ class Problem:
         parts = []
         for exp, ms, data, weights in zip(self.experiments, self.masks, self.data, self._weights):
             y = self.predictor.predict(values, exp, self.outputs)
-            self.simulations += 1
+            counted()
             for j, (m, d, w) in enumerate(zip(ms, data, weights)):
                 parts.append((d - y[m, j]) * w)
         r = np.concatenate(parts)

@@ -21,8 +21,9 @@ from typing import Any, Generic, TypeVar
 import numpy as np
 
 from fmuid.data import Spec
+from fmuid.engine.run import open_engine
+from fmuid.engine.task import Call
 from fmuid.experiment_design.space import Space
-from fmuid.experiment_design.tasks import run_evaluations
 from fmuid.model.fmu import FmuModel
 
 log = logging.getLogger(__name__)
@@ -113,7 +114,10 @@ def evaluate_resumably(
     """Evaluate the tasks not in the checkpoint, saving each as it finishes; return all results.
 
     ``names`` name each task's file; ``on_done(done, total)`` follows every finished (or
-    reloaded) evaluation, after it was saved. The rest is :func:`run_evaluations`.
+    reloaded) evaluation, after it was saved. ``evaluate`` is a picklable function of one task
+    (a module-level function or a bound method of a picklable object) that gives the same
+    numbers in any process; ``workers`` local processes (``None``: the CPU count) or the dask
+    ``executor`` run the evaluations (:func:`fmuid.engine.run.open_engine`).
     """
     results: list[R | None] = [None] * len(tasks)
     todo = []
@@ -139,13 +143,12 @@ def evaluate_resumably(
         if on_done is not None:
             on_done(done, len(tasks))
 
-    run_evaluations(
-        evaluate,
-        [tasks[k] for k in todo],
-        model,
-        interface,
+    with open_engine(
+        model.with_interface(interface),
         workers=workers,
         executor=executor,
-        on_done=finished,
-    )
+        at_most=len(todo),
+        preload=[evaluate.__module__],
+    ) as engine:
+        engine.run([Call(evaluate, (tasks[k],)) for k in todo], on_done=finished)
     return [r for r in results if r is not None]

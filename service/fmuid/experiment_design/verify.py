@@ -8,12 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from fmuid.data import Spec
+from fmuid.engine.run import open_engine
 from fmuid.estimation.optimize import fit_problem
 from fmuid.estimation.problem import Problem
 from fmuid.experiment_design.fisher import trial_problem
 from fmuid.experiment_design.signals import Trial
 from fmuid.experiment_design.space import Space
-from fmuid.experiment_design.tasks import run_evaluations
 from fmuid.model.fmu import FmuModel
 from fmuid.profiling.engine import profile_problem
 
@@ -189,7 +189,12 @@ def verify(
     ``workers`` local processes or the dask ``executor`` take one draw each.
     """
     tasks = [DrawTask(model, spec, space, trial, seed, d) for d in range(space.draws)]
-    draws = run_evaluations(
-        DrawTask.run, tasks, model, spec.interface, workers=workers, executor=executor
-    )
+    with open_engine(
+        model.with_interface(spec.interface),
+        workers=workers,
+        executor=executor,
+        at_most=len(tasks),
+        preload=[__name__],
+    ) as engine:
+        draws = engine.map(DrawTask.run, tasks)
     return combine(list(spec.parameters), draws)

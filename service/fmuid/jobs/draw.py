@@ -23,12 +23,12 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from fmuid.engine.guard import die_with_pool_owner
 from fmuid.jobs.kinds import JobInputs, runner
 from fmuid.jobs.layout import DataLayout
 from fmuid.jobs.proc import JOB_NICENESS
 from fmuid.jobs.store import Job, JobStore
 from fmuid.processes import limit_memory
-from fmuid.profiling.pool_guard import die_with_pool_owner
 
 logger = logging.getLogger(__name__)
 

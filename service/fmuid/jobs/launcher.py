@@ -5,7 +5,7 @@ the engine (numpy, scipy, FMPy, matplotlib) for every job: seconds of CPU. A war
 multiprocessing forkserver, started once by the supervisor with the engine preloaded, to fork
 the job process: each job still has a process (and process group) of its own, so a crash or a
 hang hits only that job, but starts in milliseconds. The server dies with the supervisor
-(:mod:`fmuid.profiling.forkserver_guard`) and each job process with the server; every one of
+(:mod:`fmuid.engine.forkserver_guard`) and each job process with the server; every one of
 them carries the store's tag (:data:`fmuid.jobs.proc.JOB_DB_ENV`) in its environment.
 """
 
@@ -26,14 +26,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
+from fmuid.engine.guard import POOL_PARENT_ENV, die_with_pool_owner
 from fmuid.jobs.proc import JOB_DB_ENV, JOB_NICENESS, job_command, job_environment
 from fmuid.processes import is_alive
-from fmuid.profiling.pool_guard import POOL_PARENT_ENV, die_with_pool_owner
 
 logger = logging.getLogger(__name__)
 
 PRELOAD = [
-    "fmuid.profiling.forkserver_guard",
+    "fmuid.engine.forkserver_guard",
     "fmuid.jobs.launcher",
     "fmuid.jobs.run",
     "fmuid.jobs.draw",

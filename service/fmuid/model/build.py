@@ -28,7 +28,7 @@ from fmuid.errors import BuildError, FmuError
 
 logger = logging.getLogger(__name__)
 
-_SHARED_SOURCES = ("fmi2_cs.c", "model.h")
+_SHARED_SOURCES = ("fmi2_cs.c", "model.h", "linear_step.h")
 _VARIABILITY = {"parameter": "tunable", "input": "continuous", "output": "continuous"}
 _KIND = {"parameter": "KIND_PARAMETER", "input": "KIND_INPUT", "output": "KIND_OUTPUT"}
 _ZIP_DATE = (2020, 1, 1, 0, 0, 0)
@@ -61,6 +61,8 @@ class ModelTable:
     states: tuple[str, ...]
     variables: tuple[TableEntry, ...]
     annotations: dict[str, Any] = field(default_factory=dict)
+    linear: bool = False
+    """The physics is affine in states and inputs: stepped exactly (``linear_step.h``)."""
 
 
 def load_table(model_dir: Path) -> ModelTable:
@@ -105,6 +107,7 @@ def load_table(model_dir: Path) -> ModelTable:
         tuple(raw["states"]),
         tuple(entries),
         raw.get("fmuid", {}),
+        bool(raw.get("linear", False)),
     )
 
 
@@ -122,6 +125,7 @@ def render_header(table: ModelTable) -> str:
         f"#define N_REALS {len(variables)}",
         f"#define N_STATES {len(table.states)}",
         f"#define N_INPUTS {len(inputs)}",
+        f"#define MODEL_LINEAR {int(table.linear)}",
         "enum { " + ", ".join(f"VR_{v.name} = {v.value_reference}" for v in variables) + " };",
         "enum { " + ", ".join(f"X_{s} = {i}" for i, s in enumerate(table.states)) + " };",
         "static const double START_VALUES[N_REALS] = {"

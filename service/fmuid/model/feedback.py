@@ -35,7 +35,7 @@ import numpy as np
 from fmuid.errors import FmuError
 from fmuid.model.channels import Channels
 from fmuid.model.instance import Instance
-from fmuid.model.plan import RunPlan
+from fmuid.model.plan import RunPlan, content_key
 
 KINDS = ("power", "tanh", "dead")
 
@@ -114,12 +114,31 @@ class Feedback:
 
 
 def fine_times(output_time: np.ndarray, step: float) -> np.ndarray:
-    """Output times with points added so that no interval exceeds ``step``."""
+    """Return output times with points added so that no interval exceeds ``step``.
+
+    The grid is read-only: the last :data:`FINE_KEPT` grids are kept by content.
+    """
     t = np.asarray(output_time, dtype=float)
+    key = (float(step), *content_key(t))
+    kept = _FINE.get(key)
+    if kept is None:
+        kept = _FINE[key] = _fine_times(t, step)
+        kept.setflags(write=False)
+        if len(_FINE) > FINE_KEPT:
+            _FINE.pop(next(iter(_FINE)))
+    return kept
+
+
+FINE_KEPT = 16
+"""Fine grids kept per process (:func:`fine_times`)."""
+_FINE: dict[tuple[object, ...], np.ndarray] = {}
+
+
+def _fine_times(t: np.ndarray, step: float) -> np.ndarray:
     gaps = np.diff(t)
     pieces = np.maximum(np.ceil(gaps / step - 1e-9), 1).astype(int)
     if not np.any(pieces > 1):
-        return t
+        return t.copy()
     j = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
     n = np.repeat(pieces, pieces)
     extra = np.repeat(t[:-1], pieces) + np.repeat(gaps, pieces) * j / n

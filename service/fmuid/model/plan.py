@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -34,56 +35,70 @@ class RunPlan:
 
     Attributes
     ----------
-    times
-        Sorted grid [s]: the start time, every input breakpoint inside the run, every output time.
+    grid
+        Sorted grid [s]: the start time, every input breakpoint inside the run, every output time
+        (:attr:`times` as a list, for the Python loops).
     value
         Input values at each grid point (right limits), shape ``(len(times), n_inputs)``.
     slope
         Input slopes over each grid interval [unit/s]; zero for held (non-float) inputs.
     input_time
         The input sample times [s].
-    rows_at
-        For each grid point, the rows of the result read there.
+    row_start, rows
+        ``rows[row_start[k]:row_start[k + 1]]`` are the rows of the result read at grid point
+        ``k`` (:attr:`rows_at` as lists).
     n_rows
         Number of output rows.
 
     """
 
-    times: list[float]
+    grid: np.ndarray
     value: np.ndarray
     slope: np.ndarray
     input_time: np.ndarray
-    rows_at: list[list[int]]
+    row_start: np.ndarray
+    rows: np.ndarray
     n_rows: int
+
+    @cached_property
+    def times(self) -> list[float]:
+        """The grid as floats (for the Python loops)."""
+        return self.grid.tolist()
+
+    @cached_property
+    def rows_at(self) -> list[list[int]]:
+        """For each grid point, the rows of the result read there (for the Python loops)."""
+        rows = self.rows.tolist()
+        bounds = self.row_start.tolist()
+        return [rows[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
     @cached_property
     def jump(self) -> np.ndarray:
         """Whether some input is discontinuous at each grid point (its left limit differs)."""
-        steps = self.value[:-1] + self.slope[:-1] * np.diff(self.times)[:, None]
+        steps = self.value[:-1] + self.slope[:-1] * np.diff(self.grid)[:, None]
         return np.any(np.vstack([self.value[:1], steps]) != self.value, axis=1)
 
     @cached_property
     def breakpoint(self) -> np.ndarray:
         """Whether each grid point is an input sample time (the slopes may change there)."""
-        return np.isin(self.times, self.input_time)
+        return np.isin(self.grid, self.input_time)
 
     @cached_property
     def arrays(self) -> GridArrays:
         """The plan as contiguous float64, uint8 and int64 arrays (made once per plan)."""
-        counts = [len(rows) for rows in self.rows_at]
         return GridArrays(
-            np.ascontiguousarray(self.times, dtype=np.float64),
+            np.ascontiguousarray(self.grid, dtype=np.float64),
             np.ascontiguousarray(self.value, dtype=np.float64),
             np.ascontiguousarray(self.slope, dtype=np.float64),
             np.ascontiguousarray(np.any(self.slope, axis=1), dtype=np.uint8),
-            np.concatenate(([0], np.cumsum(counts))).astype(np.int64),
-            np.array([r for rows in self.rows_at for r in rows], dtype=np.int64),
+            np.ascontiguousarray(self.row_start, dtype=np.int64),
+            np.ascontiguousarray(self.rows, dtype=np.int64),
         )
 
     @property
     def stop(self) -> float:
         """Last grid time [s]."""
-        return self.times[-1]
+        return float(self.grid[-1])
 
 
 def make_plan(
@@ -124,18 +139,61 @@ def make_plan(
         if not variable.is_continuous:
             _check_kind(variable, values, t_in)
         samples[i] = values
-    t0 = min(t_in[0], float(np.min(t_out)))
-    grid = np.unique(np.concatenate(([t0], t_in[t_in < t_out.max()], t_out)))
+    grid = _grid(t_in, t_out)
     held = [i for i, v in enumerate(inputs) if not v.is_continuous]
     value, slope = _segments(t_in, samples, grid)
     if held:
-        hold = np.searchsorted(t_in, grid, side="right") - 1
-        value[:, held] = samples[held][:, np.maximum(hold, 0)].T
+        value[:, held] = samples[held][:, np.maximum(grid.hold, 0)].T
         slope[:, held] = 0.0
-    rows_at: list[list[int]] = [[] for _ in grid]
-    for row, k in enumerate(np.searchsorted(grid, t_out).tolist()):
-        rows_at[k].append(row)
-    return RunPlan(grid.tolist(), value, slope, t_in, rows_at, t_out.size)
+    return RunPlan(grid.times, value, slope, t_in, grid.row_start, grid.rows, t_out.size)
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """What a plan's grid takes from the input and output times alone (kept by content)."""
+
+    times: np.ndarray
+    row_start: np.ndarray
+    rows: np.ndarray
+    segment: np.ndarray
+    hold: np.ndarray
+
+
+GRIDS_KEPT = 16
+"""Grids kept per process: a fit simulates the same times with new input values each time."""
+_GRIDS: dict[tuple[tuple[int, ...], bytes], _Grid] = {}
+
+
+def content_key(*arrays: np.ndarray) -> tuple[tuple[int, ...], bytes]:
+    """Return a cache key of float arrays: their sizes and a digest of their values."""
+    digest = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        digest.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    return tuple(a.size for a in arrays), digest.digest()
+
+
+def _grid(t_in: np.ndarray, t_out: np.ndarray) -> _Grid:
+    key = content_key(t_in, t_out)
+    kept = _GRIDS.get(key)
+    if kept is not None:
+        return kept
+    t0 = min(t_in[0], float(np.min(t_out)))
+    times = np.unique(np.concatenate(([t0], t_in[t_in < t_out.max()], t_out)))
+    point = np.searchsorted(times, t_out)
+    mid = np.append(0.5 * (times[:-1] + times[1:]), times[-1])
+    kept = _Grid(
+        times,
+        np.concatenate(([0], np.cumsum(np.bincount(point, minlength=times.size)))),
+        np.argsort(point, kind="stable"),
+        np.searchsorted(t_in, mid, side="right") - 1,
+        np.searchsorted(t_in, times, side="right") - 1,
+    )
+    for a in (kept.times, kept.row_start, kept.rows, kept.segment, kept.hold):
+        a.setflags(write=False)
+    _GRIDS[key] = kept
+    if len(_GRIDS) > GRIDS_KEPT:
+        _GRIDS.pop(next(iter(_GRIDS)))
+    return kept
 
 
 def _check_kind(variable: Variable, values: np.ndarray, t_in: np.ndarray) -> None:
@@ -161,9 +219,7 @@ def _check_kind(variable: Variable, values: np.ndarray, t_in: np.ndarray) -> Non
         )
 
 
-def _segments(
-    t_in: np.ndarray, samples: np.ndarray, grid: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def _segments(t_in: np.ndarray, samples: np.ndarray, grid: _Grid) -> tuple[np.ndarray, np.ndarray]:
     """Input values at each grid point and slopes over each grid interval.
 
     Every input breakpoint inside the run is a grid point, so each interval lies in one segment
@@ -176,17 +232,16 @@ def _segments(
 
     """
     n = t_in.size
-    mid = np.append(0.5 * (grid[:-1] + grid[1:]), grid[-1])
-    j = np.searchsorted(t_in, mid, side="right") - 1
+    j, times = grid.segment, grid.times
     inside = (j >= 0) & (j < n - 1)
     jc = np.clip(j, 0, max(n - 2, 0))
     if n > 1:
         dt = t_in[jc + 1] - t_in[jc]
         rate = (samples[:, jc + 1] - samples[:, jc]) / np.where(dt > 0, dt, 1.0)
         slope = np.where(inside, rate, 0.0)
-        base = samples[:, jc] + slope * (grid - t_in[jc])
+        base = samples[:, jc] + slope * (times - t_in[jc])
     else:
-        slope = np.zeros((samples.shape[0], grid.size))
+        slope = np.zeros((samples.shape[0], times.size))
         base = samples[:, jc]
     value = np.where(j < 0, samples[:, :1], np.where(j >= n - 1, samples[:, -1:], base))
     return value.T.copy(), slope.T.copy()

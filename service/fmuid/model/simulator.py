@@ -228,7 +228,7 @@ class Simulator(SimulatorBase):
         t_out = np.asarray(output_time, dtype=float)
         plan, fine = self._plan(input_time, input_values, inputs, output_time, feedback)
         instance = self._start()
-        t0 = plan.times[0]
+        t0 = float(plan.grid[0])
         instance.setup_experiment(t0, None)
         if par.size:
             instance.set(par, list(params.values()), None)
@@ -335,7 +335,7 @@ class Simulator(SimulatorBase):
         out: Channels,
     ) -> tuple[np.ndarray, float | None]:
         instance = self._start()
-        t0 = plan.times[0]
+        t0 = float(plan.grid[0])
         cosim = self.model.is_cosimulation
         instance.setup_experiment(t0, None if cosim else RTOL)
         if par.size:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fmuid.engine.count import counting
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.checks import basins, diverse_starts, jumps, refit_from
 from fmuid.profiling.ends import End, locate
@@ -31,7 +32,6 @@ class BranchResult:
     direction: int
     points: list[WalkPoint]
     better: WalkPoint | None
-    simulations: int
     ends: dict[str, End] = field(default_factory=dict)
     quality: ProfileQuality = ProfileQuality()
 
@@ -101,7 +101,6 @@ def settle_branch(
     BranchResult
 
     """
-    sims0 = problem.simulations
     thr = thresholds["simultaneous"]
     span = float(problem.z_upper[index] - problem.z_lower[index])
     estimate = WalkPoint(z_hat.copy(), chi2_hat)
@@ -155,14 +154,14 @@ def settle_branch(
                 fresh = False
             if not valleys and not others:
                 continue
-            c0 = problem.simulations
             zi = float(site.z[index])
-            from_valleys = refit_from(problem, index, zi, list(valleys), checks.refit)
-            from_others = refit_from(problem, index, zi, others, checks.refit)
-            if others:
-                known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
+            with counting() as checked:
+                from_valleys = refit_from(problem, index, zi, list(valleys), checks.refit)
+                from_others = refit_from(problem, index, zi, others, checks.refit)
+                if others:
+                    known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
             found = from_valleys + from_others
-            counts.check_sims += problem.simulations - c0
+            counts.check_sims += checked.simulations
             counts.checks += 1
             counts.starts += len(valleys) + len(others)
             if not found:
@@ -200,9 +199,7 @@ def settle_branch(
         unsettled=tuple(counts.unsettled),
         check_simulations=counts.check_sims,
     )
-    return BranchResult(
-        index, direction, points, better, problem.simulations - sims0, ends, quality
-    )
+    return BranchResult(index, direction, points, better, ends, quality)
 
 
 def _sites(
@@ -263,3 +260,41 @@ def _rewalk(
     step = abs(good[-1].z[index] - good[-2].z[index]) or options.min_step
     more, better = walk(problem, good, chi2_hat, index, direction, threshold, step, options)
     return inner + [lower] + more, better
+
+
+@dataclass(frozen=True)
+class BranchTask:
+    """Everything a worker needs to walk one branch: a task of :mod:`fmuid.engine`."""
+
+    problem: Problem
+    z_hat: np.ndarray
+    chi2_hat: float
+    index: int
+    direction: int
+    threshold: float
+    sd_z: float
+    options: WalkOptions
+    pointwise: float | None = None
+    valleys: tuple[np.ndarray, ...] = ()
+    thorough: bool = False
+    seed: int = 0
+
+    def execute(self, report: Callable[[int], None]) -> BranchResult:
+        """Walk and settle the branch, calling ``report`` with the walk points done."""
+        thresholds = {"simultaneous": self.threshold}
+        if self.pointwise is not None:
+            thresholds["pointwise"] = self.pointwise
+        return settle_branch(
+            self.problem,
+            self.z_hat,
+            self.chi2_hat,
+            self.index,
+            self.direction,
+            thresholds,
+            self.sd_z,
+            self.options,
+            valleys=self.valleys,
+            thorough=self.thorough,
+            seed=self.seed,
+            on_point=report,
+        )

@@ -11,16 +11,17 @@ from typing import Any
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
+from fmuid.engine.count import counting
+from fmuid.engine.run import open_engine
 from fmuid.estimation.optimize import FitOptions, jacobian, make_fit_result, refine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.estimation.space import z_to_value
 from fmuid.model.registry import fmu_summary
-from fmuid.profiling.branch import BranchResult
+from fmuid.profiling.branch import BranchResult, BranchTask
 from fmuid.profiling.checks import check_fit, distinct_valleys
 from fmuid.profiling.health import NOISY_FRACTION, check_health
 from fmuid.profiling.intervals import is_flat, label, noise_limited, open_reason, profile_noise
-from fmuid.profiling.parallel import BranchTask, run_branches
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
 from fmuid.profiling.structural import structural_check
@@ -93,16 +94,46 @@ def profile_problem(
     ProfileResult
 
     """
-    t0 = time.perf_counter()
-    sims = fit.cost.simulations
+    t0, fit0 = time.perf_counter(), fit
     conf = problem.spec.confidence if confidence is None else confidence
+    with counting() as count:
+        fit, profiles, better_found, check, checks = _profiles(
+            problem, fit, only, workers, executor, progress, options, conf
+        )
+    if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
+        fit = replace(fit, fmu_info=fmu_summary(problem.model))
+    return ProfileResult(
+        fit=fit,
+        confidence=conf,
+        thresholds=thresholds(conf, problem.n_free),
+        parameters=profiles,
+        better_optimum_found=better_found,
+        structural_check=check,
+        cost=Cost(
+            fit0.cost.simulations + count.simulations,
+            time.perf_counter() - t0 + fit0.cost.seconds,
+        ),
+        checks=checks,
+    )
+
+
+def _profiles(
+    problem: Problem,
+    fit: FitResult,
+    only: Sequence[str] | None,
+    workers: int | None,
+    executor: Any,
+    progress: ProgressCallback | None,
+    options: WalkOptions,
+    conf: float,
+) -> tuple[FitResult, dict[str, ParameterProfile], bool, dict[str, Any], dict[str, Any]]:
+    """Run :func:`profile_problem`'s steps; return the fit, profiles, better-found and checks."""
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
     health = check_health(
         problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
     )
-    sims += health.simulations
     if not health.smooth:
         log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
         refit = replace(options.refit, diff_step=health.diff_step, polish=True)
@@ -112,29 +143,26 @@ def profile_problem(
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
     if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
-        sims0 = problem.simulations
-        pool = check_fit(problem, options.checks, problem.spec.seed)
-        fit_check["starts"] = len(pool)
-        best = min(pool, key=lambda p: p.chi2, default=None)
-        if best is not None and best.chi2 < fit.chi2 - options.better_tol * max(
-            1.0, thr["simultaneous"]
-        ):
-            log.info("the fit check found chi2 %.6g below the fit's %.6g", best.chi2, fit.chi2)
-            fit_check["lower_found"] = True
-            better_found = True
-            pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
-            fit = _refit(problem, best.z, fit, options.refit)
-            sims += fit.cost.simulations
-        fit_check["simulations"] = problem.simulations - sims0
-        sims += problem.simulations - sims0
+        with counting() as checked:
+            pool = check_fit(problem, options.checks, problem.spec.seed)
+            fit_check["starts"] = len(pool)
+            best = min(pool, key=lambda p: p.chi2, default=None)
+            if best is not None and best.chi2 < fit.chi2 - options.better_tol * max(
+                1.0, thr["simultaneous"]
+            ):
+                log.info("the fit check found chi2 %.6g below the fit's %.6g", best.chi2, fit.chi2)
+                fit_check["lower_found"] = True
+                better_found = True
+                pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
+                fit = _refit(problem, best.z, fit, options.refit)
+        fit_check["simulations"] = checked.simulations
     for _ in range(MAX_RESTARTS + 1):
         valleys = distinct_valleys(
             pool, problem, WalkPoint(fit.z_estimate(), fit.chi2), fit.chi2 + thr["simultaneous"]
         )
-        branches, branch_sims = _walk_all(
+        branches = _walk_all(
             problem, fit, names, thr, workers, executor, progress, options, valleys
         )
-        sims += branch_sims
         better = [b.better for b in branches if b.better is not None]
         if not better:
             break
@@ -143,40 +171,28 @@ def profile_problem(
         log.info("profile found chi2 %.6g below the optimum %.6g; refitting", best.chi2, fit.chi2)
         pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
         fit = _refit(problem, best.z, fit, options.refit)
-        sims += fit.cost.simulations
     check = structural_check(
         fit.jacobian, problem.names, problem.scales, [fit.estimates[n] for n in problem.names]
     )
     sd = fit.fisher_sd_z()
     profiles = {}
-    s0 = problem.simulations
     for name in names:
         i = problem.names.index(name)
         sides = [b for b in branches if b.index == i]
         floor = health.chi2_noise.get(name, 0.0) if options.overshoot else None
         profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check, floor)
-    sims += problem.simulations - s0
     fit_check["valleys"] = len(valleys)
-    if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
-        fit = replace(fit, fmu_info=fmu_summary(problem.model))
-    return ProfileResult(
-        fit=fit,
-        confidence=conf,
-        thresholds=thr,
-        parameters=profiles,
-        better_optimum_found=better_found,
-        structural_check=check,
-        cost=Cost(sims, time.perf_counter() - t0 + fit.cost.seconds),
-        checks={"health": health.to_dict(), "fit": fit_check},
-    )
+    return fit, profiles, better_found, check, {"health": health.to_dict(), "fit": fit_check}
 
 
 def _refit(problem: Problem, z0: np.ndarray, fit: FitResult, walk: FitOptions) -> FitResult:
     """Refine from a lower point and return the new fit (polished when the walk's re-fits are)."""
-    sims0, t_refit = problem.simulations, time.perf_counter()
-    z, chi2, message = refine(problem, z0, options=FitOptions(polish=walk.polish))
-    jac = jacobian(problem, z)
-    return make_fit_result(problem, z, chi2, jac, message, fit.global_search, t_refit, sims0)
+    t_refit = time.perf_counter()
+    with counting() as count:
+        z, chi2, message = refine(problem, z0, options=FitOptions(polish=walk.polish))
+        jac = jacobian(problem, z)
+    cost = Cost(count.simulations, time.perf_counter() - t_refit)
+    return make_fit_result(problem, z, chi2, jac, message, fit.global_search, cost)
 
 
 def _walk_all(
@@ -189,7 +205,7 @@ def _walk_all(
     progress: ProgressCallback | None,
     options: WalkOptions,
     valleys: Sequence[np.ndarray],
-) -> tuple[list[BranchResult], int]:
+) -> list[BranchResult]:
     z_hat = fit.z_estimate()
     sd = fit.fisher_sd_z()
     seed = problem.spec.seed
@@ -213,8 +229,8 @@ def _walk_all(
     expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
     done: dict[tuple[int, int], int] = {}
 
-    def on_point(index: int, direction: int, n: int) -> None:
-        done[(index, direction)] = n
+    def on_point(k: int, n: int) -> None:
+        done[(tasks[k].index, tasks[k].direction)] = n
         if progress:
             per_branch = {
                 (t.index, t.direction): max(done.get((t.index, t.direction), 0), expected)
@@ -228,8 +244,14 @@ def _walk_all(
                 parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
             progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
 
-    results = run_branches(tasks, workers=workers, executor=executor, on_point=on_point)
-    return results, sum(r.simulations for r in results)
+    with open_engine(
+        problem.model,
+        workers=workers,
+        executor=executor,
+        at_most=len(tasks),
+        preload=["fmuid.profiling.branch"],
+    ) as engine:
+        return engine.run(tasks, on_event=on_point)
 
 
 def _assemble(

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from fmuid.engine.count import counted, counting
 from fmuid.errors import FmuError, FmuidError
 from fmuid.estimation.optimize import safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
@@ -177,7 +178,19 @@ def check_health(
         ignored it; see :func:`ignored_parameters`).
 
     """
-    sims0 = problem.simulations
+    with counting() as count:
+        health = _check(problem, z_hat, jacobian, progress, grid_side)
+    return replace(health, simulations=count.simulations)
+
+
+def _check(
+    problem: Problem,
+    z_hat: np.ndarray,
+    jacobian: np.ndarray,
+    progress: ProgressCallback | None,
+    grid_side: int,
+) -> Health:
+    """Run :func:`check_health`'s measurements (its simulations not counted here)."""
     no_effect = ignored_parameters(problem, z_hat, jacobian)
     fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
     residuals = _Meter(problem, 2 + len(problem.names) * (4 + 2 * grid_side), progress)
@@ -212,7 +225,6 @@ def check_health(
         jumps=jumps,
         chi2_noise=chi2_noise,
         diff_step=float(min(max(steps), MAX_DIFF_STEP)),
-        simulations=problem.simulations - sims0,
         no_effect=no_effect,
     )
 
@@ -318,7 +330,7 @@ def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
         for exp, out in zip(problem.experiments, reused, strict=True):
             t_in, u = predictor.inputs_of(exp)
             y = sim.simulate(values, t_in, u, exp.time, problem.outputs)
-            problem.simulations += 1
+            counted()
             if not all(
                 np.array_equal(y[:, j], out[o], equal_nan=True)
                 for j, o in enumerate(problem.outputs)

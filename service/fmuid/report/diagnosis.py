@@ -14,7 +14,7 @@ from fmuid.estimation.problem import Problem
 from fmuid.experiment_design.discriminate import discrimination_from_dict
 from fmuid.plots import diagnosis_figures
 from fmuid.plots.levels import level_figure
-from fmuid.readable import interval, p_text, p_value
+from fmuid.readable import duration, interval, p_text, p_value
 from fmuid.report.design import discrimination_section
 from fmuid.report.page import Cell, HtmlPage, fmt
 
@@ -193,6 +193,7 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
     _tables(page, d, units)
     _whiteness(page, d)
     _settling_test(page, d.get("discriminating_experiment"))
+    _cost(page, d.get("cost") or {})
     if problem is None:
         return
     try:
@@ -308,6 +309,16 @@ def _effects_and_validation(page: HtmlPage, d: dict[str, Any]) -> None:
     words = [v["words"] for v in levels.values() if v.get("words")]
     if words:
         page.paragraph("Where in the range: " + "; ".join(words) + ".")
+
+
+def _cost(page: HtmlPage, cost: dict[str, Any]) -> None:
+    """Add the simulations and wall time of each step of the diagnosis, and their total."""
+    stages = cost.get("stages") or []
+    if not stages:
+        return
+    rows = [[s["stage"], int(s["simulations"]), duration(float(s["seconds"]))] for s in stages]
+    rows.append(["total", int(cost["simulations"]), duration(float(cost["seconds"]))])
+    page.table(["step", "simulations", "wall time"], rows, caption="What the diagnosis cost")
 
 
 def _settling_test(page: HtmlPage, proposal: dict[str, Any] | None) -> None:

@@ -18,7 +18,13 @@ import numpy as np
 from pydantic import ValidationError
 
 from fmuid.discrepancy.residual_tests import TestResult, Window
-from fmuid.discrepancy.result import AddedEstimate, CandidateScore, Diagnosis, EffectStep
+from fmuid.discrepancy.result import (
+    AddedEstimate,
+    CandidateScore,
+    Diagnosis,
+    EffectStep,
+    StageCost,
+)
 from fmuid.discrepancy.words import RENAMED, RENAMED_PARAMETERS
 from fmuid.errors import SpecError
 from fmuid.estimation.result import SCHEMA_VERSION, Cost, FitResult
@@ -355,6 +361,10 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         scan_p_value=data.get("scan_p_value"),
         fmu=dict(data.get("fmu", {})),
         cost=_cost(data.get("cost")),
+        stages=tuple(
+            StageCost(str(c["stage"]), int(c["simulations"]), float(c["seconds"]))
+            for c in (data.get("cost") or {}).get("stages", ())
+        ),
         units=dict(data.get("units", {})),
         discriminating_experiment=data.get("discriminating_experiment"),
         effects=tuple(_step(e) for e in data.get("effects", ())),

@@ -46,6 +46,20 @@ class CostOut(_Open):
     seconds: float
 
 
+class StageCostOut(CostOut):
+    """What one step of a diagnosis cost (``stage``: e.g. ``scan``, ``profiles``)."""
+
+    stage: str
+
+
+class DiagnosisCostOut(CostOut):
+    """What a diagnosis cost, and each of its steps in order (they sum to the total)."""
+
+    stages: list[StageCostOut] = Field(
+        default=[], description="The cost of each step (none in results of before 2026-11)."
+    )
+
+
 class ValidationOut(_Open):
     """Held-out error of one test experiment and output (RMS in the output's unit)."""
 
@@ -200,6 +214,7 @@ class DiagnosisOut(_Result):
     chi2_before: float
     chi2_after: float
     parameters: dict[str, Any] = {}
+    cost: DiagnosisCostOut | None = None
 
 
 class DesignExperimentOut(_Open):

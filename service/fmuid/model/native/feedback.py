@@ -95,7 +95,7 @@ def run_native_feedback(
     status = lib.fmuid_feedback(ctypes.byref(loop), ctypes.byref(spec))  # fmi2DoStep fmi3DoStep
     if not status:
         return result, None
-    t = plan.times[loop.fail_k]
+    t = float(plan.grid[loop.fail_k])
     if loop.fail_call == DIVERGED:
         raise diverged(t)
     if loop.fail_call == CALL_GET_SOURCES:

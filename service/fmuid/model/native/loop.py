@@ -138,7 +138,7 @@ def _new_loop(
         _address(instance, f"{p}DoStep"),
         _address(instance, f"{p}Get{float_type}"),
         int(instance.v3),
-        len(plan.times),
+        plan.grid.size,
         _pointer(grid.times),
         _pointer(grid.value),
         _pointer(grid.slope),
@@ -189,7 +189,7 @@ def run_native_cosimulation(
     if not status:
         return result, None
     stopped = failure(instance, plan, inputs, outputs, loop, status)
-    following = plan.times[loop.fail_k + 1]
+    following = float(plan.grid[loop.fail_k + 1])
     if plan.rows_at[loop.fail_k + 1] and stopped >= following - 1e-12 * max(1.0, abs(stopped)):
         result[plan.rows_at[loop.fail_k + 1]] = instance.read(outputs, following)
     return result, stopped
@@ -205,7 +205,7 @@ def failure(
 ) -> float:
     """Raise the Python loop's error for the failed call, or return the stop time asked for."""
     k, call = loop.fail_k, loop.fail_call
-    t = plan.times[k]
+    t = float(plan.grid[k])
     if call in (CALL_SET, CALL_SUB_SET):
         when = t if call == CALL_SET else loop.fail_time
         raise instance.fail(inputs.setters[0], status, f"for the inputs at t = {when} s")

@@ -1,6 +1,7 @@
-"""The local worker pool of the parallel stages: stops at once on Ctrl-C, never re-runs a script.
+"""The local worker pool of the task engine: stops at once on Ctrl-C, never re-runs a script.
 
-Profile branches and design candidates run in :class:`~concurrent.futures.ProcessPoolExecutor`
+The tasks of :class:`fmuid.engine.local.PoolEngine` (profile branches, design evaluations,
+diagnosis candidates) run in :class:`~concurrent.futures.ProcessPoolExecutor`
 workers started by multiprocessing's forkserver (this process may have threads: BLAS, a job's
 watchdog). Two habits of the standard pool are unwelcome here:
 
@@ -14,7 +15,7 @@ watchdog). Two habits of the standard pool are unwelcome here:
   finish: tens of seconds. Here the workers are terminated at once and the exception goes on.
 
 Workers ignore SIGINT: a terminal's Ctrl-C reaches the whole process group, and the owner alone
-decides what happens (see :mod:`fmuid.profiling.pool_guard` for an owner that dies).
+decides what happens (see :mod:`fmuid.engine.guard` for an owner that dies).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from multiprocessing import popen_forkserver
 from multiprocessing.context import ForkServerContext, ForkServerProcess
 from typing import Any
 
-from fmuid.profiling.pool_guard import POOL_PARENT_ENV
+from fmuid.engine.guard import POOL_PARENT_ENV
 
 log = logging.getLogger(__name__)
 
@@ -87,7 +88,7 @@ def local_pool(
         Run in each worker once it has started (after SIGINT is set to be ignored).
     preload
         Modules the forkserver imports once, so that workers start with them loaded
-        (besides :mod:`fmuid.profiling.forkserver_guard`).
+        (besides :mod:`fmuid.engine.forkserver_guard`).
 
     Notes
     -----
@@ -96,7 +97,7 @@ def local_pool(
     (killed after 1 s) and the exception re-raised.
     """
     ctx = _Context()
-    ctx.set_forkserver_preload(["fmuid.profiling.forkserver_guard", *preload])
+    ctx.set_forkserver_preload(["fmuid.engine.forkserver_guard", *preload])
     os.environ[POOL_PARENT_ENV] = str(os.getpid())
     pool = ProcessPoolExecutor(
         workers,

@@ -1,0 +1,61 @@
+"""The engines give the same results, events and counts: in this process and in two workers."""
+
+import os
+from dataclasses import dataclass
+
+from fmuid.engine.count import counted, counting
+from fmuid.engine.run import open_engine
+from fmuid.model.fmu import FmuModel
+
+
+@dataclass(frozen=True)
+class Countdown:
+    """Reports ``n - 1, ..., 0`` and counts ``n`` simulations; returns ``n`` squared and its pid."""
+
+    n: int
+
+    def execute(self, report):
+        for k in reversed(range(self.n)):
+            report(k)
+        counted(self.n)
+        return self.n**2, os.getpid()
+
+
+def _run(model, workers):
+    tasks = [Countdown(n) for n in (3, 0, 5, 1)]
+    events, done = {}, []
+
+    def on_done(k, result):
+        assert k not in done and events.get(k, [0])[-1] == 0  # after all its events
+        done.append(k)
+
+    with open_engine(model, workers=workers, at_most=len(tasks)) as engine, counting() as count:
+        results = engine.run(
+            tasks, on_done=on_done, on_event=lambda k, e: events.setdefault(k, []).append(e)
+        )
+        mapped = engine.map(pow, [2, 3], [5, 2])
+    return results, events, sorted(done), mapped, count.simulations
+
+
+def test_two_workers_give_the_serial_results_events_and_order(msd_fmu):
+    model = FmuModel(msd_fmu)
+    here, events, done, mapped, sims = _run(model, 1)
+    pooled, pooled_events, pooled_done, pooled_mapped, pooled_sims = _run(model, 2)
+    assert [r[0] for r in here] == [r[0] for r in pooled] == [9, 0, 25, 1]
+    assert {pid for _, pid in here} == {os.getpid()}
+    assert os.getpid() not in {pid for _, pid in pooled}
+    assert events == pooled_events == {0: [2, 1, 0], 2: [4, 3, 2, 1, 0], 3: [0]}
+    assert done == pooled_done == [0, 1, 2, 3]
+    assert mapped == pooled_mapped == [32, 9]
+    assert sims == pooled_sims == 3 + 0 + 5 + 1
+
+
+def test_counts_nest_and_a_task_counts_apart():
+    with counting() as outer:
+        counted(2)
+        with counting() as inner:
+            counted(3)
+        with counting(apart=True) as apart:
+            counted(5)
+    counted(7)
+    assert (outer.simulations, inner.simulations, apart.simulations) == (5, 3, 5)
