@@ -31,7 +31,6 @@ over ``d >= 0`` (``C``: the pinned sensitivities of the weighted predictions, si
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,6 +42,7 @@ from fmuid.discrepancy.scan import CandidateFit, sensitivity_basis
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.space import BOUND_TOLERANCE
+from fmuid.model.kept import Kept, content_key, read_only
 
 ORDER = 2
 """Laguerre filters per input and output (the error model's order)."""
@@ -53,9 +53,8 @@ OCTAVE = 2.0
 NAME = "generic_error_model"
 """The test's name in the decision family."""
 
-KEPT = 64
+_KEPT: Kept[np.ndarray] = Kept(64)
 """Laguerre filter banks kept per process (:func:`laguerre`)."""
-_KEPT: dict[tuple[float, int, str], np.ndarray] = {}
 
 
 @dataclass(frozen=True)
@@ -119,19 +118,11 @@ def filtered(num: np.ndarray, den: np.ndarray, u: np.ndarray, time: np.ndarray) 
 def laguerre(pole_hz: float, time: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Return the first :data:`ORDER` Laguerre filters of ``u`` (linear between samples).
 
-    Kept per pole, time and input (the last :data:`KEPT` of them): every fit of a diagnosis
+    Kept per pole, time and input (the last 64 of them): every fit of a diagnosis
     (the base fit and each augmented one) is tested on the same inputs.
     """
-    digest = hashlib.blake2b(np.ascontiguousarray(time).tobytes(), digest_size=16)
-    digest.update(np.ascontiguousarray(u, dtype=float).tobytes())
-    key = (float(pole_hz), time.size, digest.hexdigest())
-    kept = _KEPT.get(key)
-    if kept is None:
-        kept = _KEPT[key] = _laguerre(pole_hz, time, u)
-        kept.setflags(write=False)
-        if len(_KEPT) > KEPT:
-            _KEPT.pop(next(iter(_KEPT)))
-    return kept
+    key = (float(pole_hz), *content_key(time, u))
+    return _KEPT.get(key, lambda: read_only(_laguerre(pole_hz, time, u)))
 
 
 def _laguerre(pole_hz: float, time: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -35,7 +35,8 @@ import numpy as np
 from fmuid.errors import FmuError
 from fmuid.model.channels import Channels
 from fmuid.model.instance import Instance
-from fmuid.model.plan import RunPlan, content_key
+from fmuid.model.kept import Kept, content_key, read_only
+from fmuid.model.plan import RunPlan
 
 KINDS = ("power", "tanh", "dead")
 
@@ -116,22 +117,14 @@ class Feedback:
 def fine_times(output_time: np.ndarray, step: float) -> np.ndarray:
     """Return output times with points added so that no interval exceeds ``step``.
 
-    The grid is read-only: the last :data:`FINE_KEPT` grids are kept by content.
+    The grid is read-only: the last 16 grids are kept by content (:class:`~fmuid.model.kept.Kept`).
     """
     t = np.asarray(output_time, dtype=float)
-    key = (float(step), *content_key(t))
-    kept = _FINE.get(key)
-    if kept is None:
-        kept = _FINE[key] = _fine_times(t, step)
-        kept.setflags(write=False)
-        if len(_FINE) > FINE_KEPT:
-            _FINE.pop(next(iter(_FINE)))
-    return kept
+    return _FINE.get((float(step), *content_key(t)), lambda: read_only(_fine_times(t, step)))
 
 
-FINE_KEPT = 16
+_FINE: Kept[np.ndarray] = Kept(16)
 """Fine grids kept per process (:func:`fine_times`)."""
-_FINE: dict[tuple[object, ...], np.ndarray] = {}
 
 
 def _fine_times(t: np.ndarray, step: float) -> np.ndarray:

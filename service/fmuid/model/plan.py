@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -12,6 +11,7 @@ import numpy as np
 
 from fmuid.errors import FmuError
 from fmuid.model.fmu import Variable
+from fmuid.model.kept import Kept, content_key, read_only
 
 
 class GridArrays(NamedTuple):
@@ -159,41 +159,26 @@ class _Grid:
     hold: np.ndarray
 
 
-GRIDS_KEPT = 16
+_GRIDS: Kept[_Grid] = Kept(16)
 """Grids kept per process: a fit simulates the same times with new input values each time."""
-_GRIDS: dict[tuple[tuple[int, ...], bytes], _Grid] = {}
-
-
-def content_key(*arrays: np.ndarray) -> tuple[tuple[int, ...], bytes]:
-    """Return a cache key of float arrays: their sizes and a digest of their values."""
-    digest = hashlib.blake2b(digest_size=16)
-    for a in arrays:
-        digest.update(np.ascontiguousarray(a, dtype=float).tobytes())
-    return tuple(a.size for a in arrays), digest.digest()
 
 
 def _grid(t_in: np.ndarray, t_out: np.ndarray) -> _Grid:
-    key = content_key(t_in, t_out)
-    kept = _GRIDS.get(key)
-    if kept is not None:
-        return kept
+    return _GRIDS.get(content_key(t_in, t_out), lambda: _make_grid(t_in, t_out))
+
+
+def _make_grid(t_in: np.ndarray, t_out: np.ndarray) -> _Grid:
     t0 = min(t_in[0], float(np.min(t_out)))
     times = np.unique(np.concatenate(([t0], t_in[t_in < t_out.max()], t_out)))
     point = np.searchsorted(times, t_out)
     mid = np.append(0.5 * (times[:-1] + times[1:]), times[-1])
-    kept = _Grid(
-        times,
-        np.concatenate(([0], np.cumsum(np.bincount(point, minlength=times.size)))),
-        np.argsort(point, kind="stable"),
-        np.searchsorted(t_in, mid, side="right") - 1,
-        np.searchsorted(t_in, times, side="right") - 1,
+    return _Grid(
+        read_only(times),
+        read_only(np.concatenate(([0], np.cumsum(np.bincount(point, minlength=times.size))))),
+        read_only(np.argsort(point, kind="stable")),
+        read_only(np.searchsorted(t_in, mid, side="right") - 1),
+        read_only(np.searchsorted(t_in, times, side="right") - 1),
     )
-    for a in (kept.times, kept.row_start, kept.rows, kept.segment, kept.hold):
-        a.setflags(write=False)
-    _GRIDS[key] = kept
-    if len(_GRIDS) > GRIDS_KEPT:
-        _GRIDS.pop(next(iter(_GRIDS)))
-    return kept
 
 
 def _check_kind(variable: Variable, values: np.ndarray, t_in: np.ndarray) -> None:
