@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import json
 import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -37,8 +38,9 @@ def results_match_their_schema() -> Iterator[None]:
     """Check every result JSON this test process writes against its kind's one schema.
 
     Each result class's ``to_dict`` is wrapped to validate its output with
-    ``fmuid.results.schema.KINDS[kind]``: a field that the schema does not type as written
-    fails the test that wrote it.
+    ``fmuid.results.schema.KINDS[kind]`` strictly: a field the schema does not name (at any
+    depth), or does not type as written (the schema's dump of it differs), fails the test that
+    wrote it.
     """
     from fmuid.discrepancy.result import Diagnosis
     from fmuid.estimation.result import FitResult
@@ -57,7 +59,8 @@ def _validated(to_dict: Callable[..., dict[str, Any]]) -> Callable[..., dict[str
     @functools.wraps(to_dict)
     def checked(self: Any, *args: Any, **kwargs: Any) -> dict[str, Any]:
         out = to_dict(self, *args, **kwargs)
-        KINDS[out["kind"]].model_validate(out)
+        again = KINDS[out["kind"]].model_validate(out).model_dump(mode="json", exclude_unset=True)
+        assert json.dumps(again) == json.dumps(out), f"{out['kind']} JSON is not its schema's"
         return out
 
     return checked

@@ -2,8 +2,9 @@
 
 One helper for every stage: :func:`record` stamps a result object (any frozen dataclass with a
 ``provenance`` field) with the fmuid version, the FMU's sha256, the seed, the options, the
-spec's and the data's hashes, start and end time and the machine. ``to_dict`` writes it under
-``provenance``; :func:`fmuid.load_result` reads it back (:meth:`Provenance.from_dict`).
+spec's and the data's hashes, start and end time and the machine. The result's ``to_dict``
+writes it under ``provenance`` (its schema: ``fmuid.estimation.schema.ProvenanceOut``);
+:func:`fmuid.load_result` reads it back (:meth:`Provenance.from_dict`).
 """
 
 from __future__ import annotations
@@ -64,12 +65,6 @@ class Provenance:
     started: str
     finished: str
     machine: dict[str, Any] = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form (the ``provenance`` block)."""
-        out = dataclasses.asdict(self)
-        out["data"] = [dict(d) for d in self.data]
-        return out
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Provenance:
@@ -134,11 +129,6 @@ def record(
         machine=machine(),
     )
     return dataclasses.replace(result, provenance=provenance)  # type: ignore[type-var]
-
-
-def entry(provenance: Provenance | None) -> dict[str, Any]:
-    """Return ``{"provenance": ...}`` for a result's ``to_dict``, or nothing when unknown."""
-    return {} if provenance is None else {"provenance": provenance.to_dict()}
 
 
 def read(data: Mapping[str, Any]) -> Provenance | None:

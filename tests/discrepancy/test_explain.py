@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from types import SimpleNamespace
 from typing import Any
 
@@ -10,8 +11,10 @@ from fmuid.discrepancy import explain
 from fmuid.discrepancy.decide import Tie
 from fmuid.discrepancy.effects import DeclaredPhysics, Effect
 from fmuid.discrepancy.knowledge import AddedParameter
-from fmuid.discrepancy.result import AddedEstimate, EffectStep, verdict
+from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
 from fmuid.discrepancy.settle import hypothesis_names
+from fmuid.estimation.validation import ValidationEntry
+from fmuid.results import result_from_dict
 
 
 def _candidate(effect: str, parameter: str) -> Effect:
@@ -22,6 +25,12 @@ def _candidate(effect: str, parameter: str) -> Effect:
 
 def _step(effect: str, parameter: str, estimate: AddedEstimate) -> EffectStep:
     return EffectStep(effect, effect, "a shift", {parameter: estimate}, 40.0, 20.0, 1e-5, 1e-4)
+
+
+def _mismatch(**fields: Any) -> Diagnosis:
+    """A diagnosis that found a mismatch, with ``fields`` set."""
+    base = result_from_dict({"mismatch": True, "chi2_before": 40.0, "chi2_after": 20.0})
+    return replace(base, **fields)
 
 
 def _tie(effect: str, parameter: str, p_value: float) -> Any:
@@ -60,32 +69,24 @@ def test_a_generic_error_model_that_fits_as_well_is_said() -> None:
     text = explain.explained([named], 40.0, 20.0, 1e-5, [], True, rival)
     assert "outside the catalogue (Laguerre filters) explains the data as well" in text
     assert "Vuong p = 0.65" in text
-    doc = {
-        "mismatch": True,
-        "effect": "tire_saturation",
-        "lrt_p_value": 1e-5,
-        "indistinguishable": [rival],
-        "effects": [{"effect": "tire_saturation"}],
-    }
-    assert verdict(doc).startswith("Physics outside the catalogue explains the mismatch as well")
+    found = _mismatch(
+        effect="tire_saturation", lrt_p_value=1e-5, indistinguishable=(rival,), effects=(named,)
+    )
+    assert found.verdict().startswith("Physics outside the catalogue explains the mismatch as well")
 
 
 def test_several_effects_and_held_out_errors_are_in_the_verdict() -> None:
-    doc = {
-        "mismatch": True,
-        "effect": "steer_offset",
-        "lrt_p_value": 1e-9,
-        "effects": [{"effect": "steer_offset"}, {"effect": "feedback_polynomial"}],
-        "validation": [
-            {
-                "experiment": "test.csv",
-                "output": "x",
-                "rms_base": 0.0071,
-                "rms_final": 0.00098,
-                "rms_by_step": [0.0069, 0.00098],
-            }
-        ],
-    }
-    text = verdict(doc)
+    estimate = AddedEstimate(0.1, (0.05, 0.2), 0.95, "rad", 0.0, True)
+    held_out = ValidationEntry("test.csv", "x", 100, 0.0071).with_steps([0.0069, 0.00098])
+    found = _mismatch(
+        effect="steer_offset",
+        lrt_p_value=1e-9,
+        effects=(
+            _step("steer_offset", "offset", estimate),
+            _step("feedback_polynomial", "c1", estimate),
+        ),
+        validation=(held_out,),
+    )
+    text = found.verdict()
     assert text.startswith("input_offset, then feedback_polynomial explain the mismatch")
     assert "held-out RMS simulation error x 0.0071 -> 0.00098 (test.csv)" in text

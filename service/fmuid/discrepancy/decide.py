@@ -42,7 +42,9 @@ from scipy import special, stats
 
 from fmuid.discrepancy.residual_tests import TestResult
 from fmuid.discrepancy.scan import CandidateFit
+from fmuid.discrepancy.schema import TieOut
 from fmuid.discrepancy.threshold import BATCH
+from fmuid.estimation.schema import Written
 from fmuid.readable import p_text
 
 SCAN_WEIGHT = 0.7
@@ -211,8 +213,10 @@ def family_weights(tests: Sequence[TestResult]) -> list[tuple[TestResult, float]
 
 
 @dataclass(frozen=True)
-class Tie:
+class Tie(Written):
     """A candidate that explains the data as well as the named one.
+
+    ``to_dict`` writes :class:`~fmuid.discrepancy.schema.TieOut`.
 
     Attributes
     ----------
@@ -233,17 +237,7 @@ class Tie:
     p_value: float
     max_difference: float
 
-    def to_dict(self) -> dict[str, object]:
-        """Return the JSON form."""
-        return {
-            "effect": self.fit.candidate.effect,
-            "parameters": {k: float(v) for k, v in self.fit.values.items()},
-            "chi2": float(self.fit.chi2),
-            "test": self.test,
-            "statistic": float(self.statistic),
-            "p_value": float(self.p_value),
-            "max_difference_sigma": float(self.max_difference),
-        }
+    schema = TieOut
 
 
 def vuong(best: CandidateFit, other: CandidateFit) -> tuple[float, float]:

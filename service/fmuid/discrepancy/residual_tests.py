@@ -98,19 +98,6 @@ class TestResult:
     statistic: float
     df: float | None = None
 
-    def to_dict(self) -> dict[str, object]:
-        """Return the JSON form (``test``, ``output``, ``experiment``, ``p_value``, ...)."""
-        out: dict[str, object] = {"test": self.test}
-        if self.output is not None:
-            out["output"] = self.output
-        if self.experiment is not None:
-            out["experiment"] = self.experiment
-        out["p_value"] = float(self.p_value)
-        out["statistic"] = float(self.statistic)
-        if self.df is not None:
-            out["df"] = float(self.df)
-        return out
-
 
 def lb_lags(n: int) -> int:
     """Lags of the whiteness test of a series of ``n`` samples: ``min(20, n // 10)``, at least 1.
@@ -301,15 +288,6 @@ class Window:
     start: float
     end: float
     score: float
-
-    def to_dict(self) -> dict[str, object]:
-        """Return the JSON form."""
-        return {
-            "experiment": self.experiment,
-            "output": self.output,
-            "window": [float(self.start), float(self.end)],
-            "score": float(self.score),
-        }
 
 
 def windows(series: Series, width_s: float = 2.0, alpha: float = FALSE_ALARM) -> list[Window]:

@@ -7,69 +7,30 @@ from typing import TYPE_CHECKING, Any
 
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.residual_tests import TestResult, Window
-from fmuid.estimation.result import SCHEMA_VERSION, Cost
-from fmuid.provenance import Provenance, entry
+from fmuid.discrepancy.schema import AddedOut, CandidateScore, DiagnosisOut
+from fmuid.estimation.result import Cost
+from fmuid.estimation.schema import Written
+from fmuid.provenance import Provenance
 from fmuid.readable import p_text
 
 if TYPE_CHECKING:
     from fmuid.estimation.problem import Problem
+    from fmuid.estimation.validation import ValidationEntry
+
+__all__ = [
+    "AddedEstimate",
+    "CandidateScore",
+    "Diagnosis",
+    "EffectStep",
+    "StageCost",
+]
+
+HIDDEN_BY = ("generic_error_model", "catalogue_scan", "experiments_disagree")
+"""Tests that find a mismatch the base model's residuals do not show."""
 
 
 @dataclass(frozen=True)
-class CandidateScore:
-    """How well one candidate explains the data.
-
-    Attributes
-    ----------
-    effect
-        Catalogue name.
-    parameters
-        Added parameter names and their fitted values.
-    chi2
-        Chi2 of the augmented fit.
-    p_value
-        Likelihood-ratio test against the model it augments: the chi2 drop (``statistic``)
-        against chi-bar-square (off value at a bound) or chi2 (df = added parameters).
-    bic
-        ``chi2 + k ln(n)`` of the augmented model (k free parameters, n data).
-    stage
-        1 for the first round, 2 for the second (on top of the first effect).
-    statistic
-        The chi2 drop.
-    p_adjusted
-        ``p_value`` adjusted for the scan over every candidate of the round (min-P).
-    fitted
-        Whether every parameter was fitted (else the linearised screen's value).
-
-    """
-
-    effect: str
-    parameters: dict[str, float]
-    chi2: float
-    p_value: float
-    bic: float
-    stage: int = 1
-    statistic: float = 0.0
-    p_adjusted: float = 1.0
-    fitted: bool = True
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form."""
-        return {
-            "effect": self.effect,
-            "parameters": {k: float(v) for k, v in self.parameters.items()},
-            "chi2": float(self.chi2),
-            "p_value": float(self.p_value),
-            "bic": float(self.bic),
-            "stage": self.stage,
-            "statistic": float(self.statistic),
-            "p_adjusted": float(self.p_adjusted),
-            "fitted": self.fitted,
-        }
-
-
-@dataclass(frozen=True)
-class AddedEstimate:
+class AddedEstimate(Written):
     """Estimate and profile-likelihood interval of an added parameter.
 
     Attributes
@@ -95,6 +56,8 @@ class AddedEstimate:
     off: float
     excludes_off: bool
 
+    schema = AddedOut
+
     @classmethod
     def of(
         cls,
@@ -114,17 +77,6 @@ class AddedEstimate:
             high = hi if hi is not None else p.spec.upper
             excludes = not low <= p.off <= high
         return cls(value, ci, confidence, p.unit, p.off, bool(excludes))
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form."""
-        return {
-            "estimate": float(self.estimate),
-            "ci": [None if v is None else float(v) for v in self.ci],
-            "confidence": self.confidence,
-            "unit": self.unit,
-            "off": float(self.off),
-            "excludes_off": self.excludes_off,
-        }
 
 
 @dataclass(frozen=True)
@@ -160,20 +112,10 @@ class EffectStep:
     p_adjusted: float
     coupling_error: float | None = None
 
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form."""
-        return {
-            "effect": self.effect,
-            "label": self.label,
-            "description": self.description,
-            "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
-            "chi2_before": float(self.chi2_before),
-            "chi2_after": float(self.chi2_after),
-            "chi2_drop": float(self.chi2_before - self.chi2_after),
-            "p_value": float(self.p_value),
-            "p_adjusted": float(self.p_adjusted),
-            "coupling_error": self.coupling_error,
-        }
+    @property
+    def chi2_drop(self) -> float:
+        """The chi2 the step removed."""
+        return self.chi2_before - self.chi2_after
 
 
 @dataclass(frozen=True)
@@ -184,17 +126,18 @@ class StageCost:
     simulations: int
     seconds: float
 
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form ``{"stage": ..., "simulations": ..., "seconds": ...}``."""
-        return {"stage": self.stage, **Cost(self.simulations, self.seconds).to_dict()}
-
 
 @dataclass(frozen=True)
-class Diagnosis:
+class Diagnosis(Written):
     """Outcome of ``fmuid.diagnose``: is there a mismatch, where, what explains it.
 
-    ``to_dict`` gives the contract's JSON plus the extra keys documented there.
+    ``to_dict`` writes the JSON of :class:`~fmuid.discrepancy.schema.DiagnosisOut` (the
+    contract's, plus the extra keys documented there); the dicts it holds (``location``,
+    ``indistinguishable``, ``absorbed``, ``generic_correction``,
+    ``discriminating_experiment``) are typed there.
     """
+
+    schema = DiagnosisOut
 
     mismatch: bool
     false_alarm: float
@@ -227,7 +170,7 @@ class Diagnosis:
     units: dict[str, str] = field(default_factory=dict)
     discriminating_experiment: dict[str, Any] | None = None
     effects: tuple[EffectStep, ...] = ()
-    validation: tuple[dict[str, Any], ...] = ()
+    validation: tuple[ValidationEntry, ...] = ()
     provenance: Provenance | None = None
     problem: Problem | None = field(default=None, repr=False, compare=False)
     """The problem the stage computed it on (set by ``fmuid.fit``, ``profile``, ``diagnose``;
@@ -242,51 +185,59 @@ class Diagnosis:
             if t.test == "residual_whiteness"
         }
 
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form of the contract (plus extra keys)."""
-        params = {
-            name: {"before": self.parameters_before.get(name), "after": value}
-            for name, value in self.parameters_after.items()
-        }
-        for name, value in self.parameters_before.items():
-            params.setdefault(name, {"before": value, "after": None})
-        out = {
-            "kind": "diagnose",
-            "schema_version": SCHEMA_VERSION,
-            "mismatch": self.mismatch,
-            "evidence": [t.to_dict() for t in self.evidence],
-            "location": self.location,
-            "effect": self.effect,
-            "description": self.description,
-            "candidates": [c.to_dict() for c in self.candidates],
-            "added_parameters": {k: v.to_dict() for k, v in self.added_parameters.items()},
-            "chi2_before": float(self.chi2_before),
-            "chi2_after": float(self.chi2_after),
-            "parameters": params,
-            "fmu": dict(self.fmu),
-            "n_data": self.n_data,
-            "false_alarm": self.false_alarm,
-            "second_effect": self.second_effect,
-            "indistinguishable": list(self.indistinguishable),
-            "absorbed": self.absorbed,
-            "scan_p_value": None if self.scan_p_value is None else float(self.scan_p_value),
-            "lrt_p_value": None if self.lrt_p_value is None else float(self.lrt_p_value),
-            "bic_before": float(self.bic_before),
-            "bic_after": float(self.bic_after),
-            "whiteness_before": self.whiteness(after=False),
-            "whiteness_after": self.whiteness(after=True),
-            "windows": [w.to_dict() for w in self.windows],
-            "tests_before": [t.to_dict() for t in self.tests_before],
-            "tests_after": [t.to_dict() for t in self.tests_after],
-            "generic_correction": self.generic_correction,
-            "cost": {**self.cost.to_dict(), "stages": [s.to_dict() for s in self.stages]},
-            "units": dict(self.units),
-            "discriminating_experiment": self.discriminating_experiment,
-            "effects": [e.to_dict() for e in self.effects],
-            "validation": list(self.validation),
-            **entry(self.provenance),
-        }
-        return {"verdict": verdict(out), **out}
+    def verdict(self) -> str:
+        """One sentence: mismatch or not, what explains it, how strongly.
+
+        Effect names of earlier versions read as today's (``sensor_lag`` as ``output_lag``).
+        """
+        from fmuid.discrepancy.words import effect_of
+
+        if not self.mismatch:
+            return (
+                "No mismatch: no test rejects the model at a family-wise level of "
+                f"{self.false_alarm:g}."
+            )
+        hidden = bool(self.evidence) and all(e.test in HIDDEN_BY for e in self.evidence)
+        if self.effect in (None, "unexplained"):
+            outputs = ", ".join(self.location.get("outputs") or []) or "the outputs"
+            note = ", although the base model's residuals look like noise" if hidden else ""
+            return f"A mismatch in {outputs} that no catalogue entry explains{note}."
+        ties = [str(t["effect"]) for t in self.indistinguishable]
+        named = [effect_of(e.effect) for e in self.effects] or [effect_of(self.effect)]
+        p = self.lrt_p_value
+        words = (
+            "evidence"
+            if p is None
+            else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else "moderate")
+            + f" evidence ({p_text(p)})"
+        )
+        what = ", then ".join(named)
+        verb = "explains" if len(named) == 1 else "explain"
+        if "unexplained" in ties:
+            out = (
+                f"Physics outside the catalogue explains the mismatch as well as {what}, which "
+                f"{verb} it with {words}"
+            )
+            ties = [t for t in ties if t != "unexplained"]
+        else:
+            out = f"{what} {verb} the mismatch, with {words}"
+        if hidden:
+            out += ", although the base model's residuals look like noise"
+        if ties:
+            out += (
+                f"; {', '.join(effect_of(t) for t in ties)} explain{'s' if len(ties) == 1 else ''}"
+            )
+            out += " it equally well"
+        return out + self._validation_clause() + "."
+
+    def _validation_clause(self) -> str:
+        """``; held-out RMS error of x 7.1e-03 -> 9.8e-04 (test.csv)`` for the named model."""
+        parts = [
+            f"{v.output} {v.rms_base:.3g} -> {v.rms_final:.3g} ({v.experiment})"
+            for v in self.validation
+            if v.rms_by_step and v.rms_final is not None
+        ]
+        return f"; held-out RMS simulation error {', '.join(parts)}" if parts else ""
 
     def to_frame(self) -> Any:
         """Return a pandas table of the parameters before and after, and the added ones.
@@ -316,61 +267,3 @@ class Diagnosis:
                 "ci_high": nan_if_none(added.ci[1]),
             }
         return parameter_frame(rows)
-
-
-def _validation_clause(d: dict[str, Any]) -> str:
-    """``; held-out RMS error of x 7.1e-03 -> 9.8e-04 (test.csv)`` for the named model."""
-    parts = []
-    for v in d.get("validation") or []:
-        if v.get("rms_by_step"):
-            parts.append(
-                f"{v['output']} {v['rms_base']:.3g} -> {v['rms_final']:.3g} ({v['experiment']})"
-            )
-    return f"; held-out RMS simulation error {', '.join(parts)}" if parts else ""
-
-
-def verdict(d: dict[str, Any]) -> str:
-    """One sentence from a diagnosis' JSON: mismatch or not, what explains it, how strongly.
-
-    Effect names of earlier versions read as today's (``sensor_lag`` as ``output_lag``).
-    """
-    from fmuid.discrepancy.words import effect_of
-
-    level = d.get("false_alarm", 0.01)
-    if not d.get("mismatch"):
-        return f"No mismatch: no test rejects the model at a family-wise level of {level:g}."
-    effect = d.get("effect")
-    evidence = d.get("evidence") or []
-    hidden = bool(evidence) and all(
-        e.get("test") in ("generic_error_model", "catalogue_scan", "experiments_disagree")
-        for e in evidence
-    )
-    if effect in (None, "unexplained"):
-        outputs = ", ".join((d.get("location") or {}).get("outputs") or []) or "the outputs"
-        note = ", although the base model's residuals look like noise" if hidden else ""
-        return f"A mismatch in {outputs} that no catalogue entry explains{note}."
-    ties = [t["effect"] if isinstance(t, dict) else str(t) for t in d.get("indistinguishable", [])]
-    named = [effect_of(e["effect"]) for e in d.get("effects") or []] or [effect_of(effect)]
-    p = d.get("lrt_p_value")
-    words = (
-        "evidence"
-        if p is None
-        else ("very strong" if p < 1e-6 else "strong" if p < 1e-3 else "moderate")
-        + f" evidence ({p_text(p)})"
-    )
-    what = ", then ".join(named)
-    verb = "explains" if len(named) == 1 else "explain"
-    if "unexplained" in ties:
-        out = (
-            f"Physics outside the catalogue explains the mismatch as well as {what}, which "
-            f"{verb} it with {words}"
-        )
-        ties = [t for t in ties if t != "unexplained"]
-    else:
-        out = f"{what} {verb} the mismatch, with {words}"
-    if hidden:
-        out += ", although the base model's residuals look like noise"
-    if ties:
-        out += f"; {', '.join(effect_of(t) for t in ties)} explain{'s' if len(ties) == 1 else ''}"
-        out += " it equally well"
-    return out + _validation_clause(d) + "."

@@ -41,15 +41,15 @@ def fit_of(problem: Problem, z: np.ndarray, chi2: float) -> FitResult:
 def score(f: CandidateFit, p_adjusted: float) -> CandidateScore:
     """Return a scored candidate's summary for the result."""
     return CandidateScore(
-        f.candidate.effect,
-        f.values,
-        f.chi2,
-        f.p_value,
-        f.bic,
-        f.stage,
-        f.statistic,
-        p_adjusted,
-        f.fitted,
+        effect=f.candidate.effect,
+        parameters=f.values,
+        chi2=f.chi2,
+        p_value=f.p_value,
+        bic=f.bic,
+        stage=f.stage,
+        statistic=f.statistic,
+        p_adjusted=p_adjusted,
+        fitted=f.fitted,
     )
 
 

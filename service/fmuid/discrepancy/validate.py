@@ -8,7 +8,6 @@ simulation error in the output's unit, over the rows after the settle-in window.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 import numpy as np
 
@@ -16,12 +15,12 @@ from fmuid.data import Experiment
 from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.engine.count import counted
 from fmuid.estimation.problem import Problem
-from fmuid.estimation.validation import held_out_rms
+from fmuid.estimation.validation import ValidationEntry, held_out_rms
 
 
 def validation(
     models: Sequence[tuple[Problem, Mapping[str, float]]], experiments: Sequence[Experiment]
-) -> list[dict[str, Any]]:
+) -> list[ValidationEntry]:
     """Return the contract's entries for the base model (first) and each model after it.
 
     Each entry: experiment, output, n, ``rms_base``, ``rms_by_step`` (the base, then after each
@@ -36,10 +35,7 @@ def validation(
         )
         counted(len(experiments))
         runs.append({(e.experiment, e.output): e for e in found})
-    return [
-        entry.with_steps([run[key].rms_base for run in runs]).to_dict()
-        for key, entry in runs[0].items()
-    ]
+    return [entry.with_steps([run[key].rms_base for run in runs]) for key, entry in runs[0].items()]
 
 
 def coupling_error(problem: Problem, values: Mapping[str, float]) -> float | None:

@@ -7,36 +7,36 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fmuid.estimation.schema import SCHEMA_VERSION, CostOut, FitResultOut, Written
 from fmuid.estimation.space import ParameterSpace
-from fmuid.provenance import Provenance, entry
+from fmuid.provenance import Provenance
 
 if TYPE_CHECKING:
     from fmuid.estimation.problem import Problem
     from fmuid.estimation.validation import ValidationEntry
 
-SCHEMA_VERSION = 1
-"""Version of the result JSON's schema (``fmuid.results.schema``), written as ``schema_version``.
-
-Version 1 added ``kind`` and ``schema_version``; files without them are version 0 (read by
-their keys). Raise it when a field changes meaning; adding a field keeps it.
-"""
+__all__ = ["SCHEMA_VERSION", "Cost", "FitResult"]
+"""``SCHEMA_VERSION`` is :data:`fmuid.estimation.schema.SCHEMA_VERSION`."""
 
 
 @dataclass(frozen=True)
-class Cost:
-    """What a stage cost: FMU simulations run and wall time in seconds."""
+class Cost(Written):
+    """What a stage cost: FMU simulations run and wall time in seconds.
+
+    ``to_dict`` gives ``{"simulations": ..., "seconds": ...}`` (seconds to the ms).
+    """
+
+    schema = CostOut
 
     simulations: int
     seconds: float
 
-    def to_dict(self) -> dict[str, float]:
-        """Return the JSON form ``{"simulations": ..., "seconds": ...}``."""
-        return {"simulations": int(self.simulations), "seconds": round(float(self.seconds), 3)}
-
 
 @dataclass(frozen=True)
-class FitResult:
+class FitResult(Written):
     """Best-fit parameters of a study.
+
+    ``to_dict`` writes the JSON of :class:`~fmuid.estimation.schema.FitResultOut`.
 
     Attributes
     ----------
@@ -102,6 +102,8 @@ class FitResult:
     """The problem the stage computed it on (set by ``fmuid.fit``, ``profile``, ``diagnose``;
     not written to the JSON): ``write_report(result, folder)`` needs nothing else."""
 
+    schema = FitResultOut
+
     @property
     def space(self) -> ParameterSpace:
         """The fitted parameters' space: names, scales and bounds."""
@@ -128,41 +130,6 @@ class FitResult:
             weak = bool(np.any(np.abs(u[i, singular]) > 1e-3)) if singular.any() else False
             out[name] = float("inf") if weak or sd[i] == 0 else float(sd[i])
         return out
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form written by ``fmuid fit``."""
-        on_bound = self.space.at_bound(self.z_estimate())
-        return {
-            "kind": "fit",
-            "schema_version": SCHEMA_VERSION,
-            "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name, **self.fmu_info},
-            "n_data": self.n_data,
-            "chi2": float(self.chi2),
-            "sigma": {k: float(v) for k, v in self.sigma.items()},
-            "sigma_method": dict(self.sigma_method),
-            "parameters": {
-                n: {
-                    "estimate": float(self.estimates[n]),
-                    "lower": float(self.lower[n]),
-                    "upper": float(self.upper[n]),
-                    "scale": s,
-                    "unit": self.units.get(n, ""),
-                    "at_bound": n in on_bound,
-                }
-                for n, s in zip(self.names, self.scales, strict=True)
-            },
-            "fixed": {k: v if isinstance(v, str) else float(v) for k, v in self.fixed.items()},
-            "global_search": self.global_search,
-            "message": self.message,
-            "cost": self.cost.to_dict(),
-            "units": dict(self.units),
-            **entry(self.provenance),
-            **self.validation_dict(),
-        }
-
-    def validation_dict(self) -> dict[str, Any]:
-        """Return ``{"validation": [...]}`` when there is test data, else an empty dict."""
-        return {"validation": [v.to_dict() for v in self.validation]} if self.validation else {}
 
     def to_frame(self) -> Any:
         """Return a pandas table of the estimates, one row per free parameter (needs pandas).

@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
@@ -18,13 +17,17 @@ from fmuid.data import Experiment
 from fmuid.data.checks import settled_rows
 from fmuid.errors import FmuError
 from fmuid.estimation.predictor import Predictor
+from fmuid.estimation.schema import ValidationOut, Written
 
 __all__ = ["ValidationEntry", "held_out_rms"]
 
 
 @dataclass(frozen=True)
-class ValidationEntry:
+class ValidationEntry(Written):
     """The held-out error of one output in one test experiment.
+
+    ``to_dict`` writes :class:`~fmuid.estimation.schema.ValidationOut` (``rms_final`` and the
+    steps only when set).
 
     Attributes
     ----------
@@ -50,23 +53,12 @@ class ValidationEntry:
     rms_final: float | None = None
     rms_by_step: tuple[float, ...] = ()
 
+    schema = ValidationOut
+
     def with_steps(self, rms_by_step: Sequence[float]) -> ValidationEntry:
         """Return this entry with the errors of an augmented model's steps (the last is final)."""
         steps = tuple(float(r) for r in rms_by_step)
         return replace(self, rms_by_step=steps, rms_final=steps[-1] if steps else None)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form of the contract (``rms_final`` and steps only when set)."""
-        out: dict[str, Any] = {
-            "experiment": self.experiment,
-            "output": self.output,
-            "n": self.n,
-            "rms_base": self.rms_base,
-        }
-        if self.rms_final is not None:
-            out["rms_final"] = self.rms_final
-            out["rms_by_step"] = list(self.rms_by_step)
-        return out
 
 
 def held_out_rms(

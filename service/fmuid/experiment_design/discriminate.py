@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import chi2 as chi2_dist
 
 from fmuid.data import ParameterSpec, Spec
 from fmuid.discrepancy.augment import AugmentedPredictor
@@ -25,7 +24,9 @@ from fmuid.discrepancy.effects import Effect
 from fmuid.estimation.optimize import fit_problem, jacobian
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
+from fmuid.estimation.schema import Written
 from fmuid.experiment_design.fisher import trial_spec
+from fmuid.experiment_design.schema import DiscriminatingOut
 from fmuid.experiment_design.signals import (
     Trial,
     output_times,
@@ -100,7 +101,7 @@ def _model(path: Path) -> FmuModel:
 
 
 @dataclass(frozen=True)
-class Discrimination:
+class Discrimination(Written):
     """The proposed test and its expected separation.
 
     Attributes
@@ -122,7 +123,12 @@ class Discrimination:
     confirmed
         Whether ``separation`` comes from full fits (else from the linearised screen).
 
+    ``to_dict`` writes :class:`~fmuid.experiment_design.schema.DiscriminatingOut` (a
+    diagnosis' ``discriminating_experiment``; ``time`` and ``predictions`` to 6 digits carry
+    what the plot draws).
     """
+
+    schema = DiscriminatingOut
 
     trial: Trial
     hypotheses: tuple[str, str]
@@ -138,31 +144,6 @@ class Discrimination:
     def expected_chi2(self) -> float:
         """The smaller separation: the expected likelihood-ratio statistic."""
         return min(self.separation.values())
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON form (``discriminating_experiment`` of the diagnose result).
-
-        ``time`` and ``predictions`` (6 significant digits) carry what the plot draws.
-        """
-        lam = self.expected_chi2
-        return {
-            "experiment": self.trial.to_dict(self.input_name),
-            "hypotheses": list(self.hypotheses),
-            "expected_separation": {k: round(v, 4) for k, v in self.separation.items()},
-            "expected_chi2": round(lam, 4),
-            "expected_p_value": float(chi2_dist.sf(lam, 1)),
-            "screened": self.screened,
-            "noise_sigma": dict(self.sigma),
-            "confirmed": self.confirmed,
-            "time": _digits(self.time),
-            "predictions": {
-                h: {o: _digits(y) for o, y in ys.items()} for h, ys in self.predictions.items()
-            },
-        }
-
-
-def _digits(values: np.ndarray) -> list[float]:
-    return [float(f"{v:.6g}") for v in np.asarray(values, dtype=float)]
 
 
 def discrimination_from_dict(doc: Mapping[str, Any]) -> Discrimination:

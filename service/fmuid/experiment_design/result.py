@@ -6,11 +6,12 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from fmuid.estimation.result import SCHEMA_VERSION, Cost
+from fmuid.estimation.result import Cost
+from fmuid.estimation.schema import Written
+from fmuid.experiment_design.schema import DesignResultOut
 from fmuid.experiment_design.signals import Trial, trial_from_dict
 from fmuid.experiment_design.verify import Verification
-from fmuid.provenance import Provenance, entry, read
-from fmuid.readable import shown_seconds
+from fmuid.provenance import Provenance, read
 
 
 @dataclass(frozen=True)
@@ -37,23 +38,6 @@ class RankedDesign:
     predicted: dict[str, dict[str, Any]]
     verified: Verification | None = None
 
-    def to_dict(self, input_name: str) -> dict[str, Any]:
-        """Return the contract's design entry."""
-        return {
-            "experiment": self.trial.to_dict(input_name),
-            "predicted": {
-                n: {
-                    "ci": [_num(e) for e in p["ci"]],
-                    "status": p["status"],
-                    **({"width": _num(p["width_z"])} if "width_z" in p else {}),
-                }
-                for n, p in self.predicted.items()
-            },
-            "verified": self.verified.to_dict() if self.verified is not None else None,
-            "score": _num(self.score),
-            "cost": {"duration": self.trial.duration, "sensors": len(self.trial.outputs)},
-        }
-
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RankedDesign:
         """Build a design back from :meth:`to_dict` (a verification keeps its median widths)."""
@@ -78,8 +62,8 @@ class RankedDesign:
 
 
 @dataclass(frozen=True)
-class DesignResult:
-    """What ``fmuid design`` returns.
+class DesignResult(Written):
+    """What ``fmuid design`` returns; ``to_dict`` writes :class:`.schema.DesignResultOut`.
 
     Attributes
     ----------
@@ -116,33 +100,12 @@ class DesignResult:
     stage_seconds: dict[str, float] = field(default_factory=dict)
     provenance: Provenance | None = None
 
+    schema = DesignResultOut
+
     @property
     def best(self) -> RankedDesign:
         """The recommended design."""
         return self.designs[0]
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the contract's JSON form."""
-        return {
-            "kind": "design",
-            "schema_version": SCHEMA_VERSION,
-            "fmu": {"sha256": self.fmu_sha256, "model_name": self.model_name},
-            "criterion": self.criterion,
-            "designs": [d.to_dict(self.input_name) for d in self.designs],
-            "not_identifiable_by_any": [
-                {"parameters": c["parameters"], "meaning": c["meaning"]}
-                for c in self.not_identifiable_by_any
-            ],
-            "tradeoffs": self.tradeoffs,
-            "screened": self.screened,
-            "cost": {
-                **self.cost.to_dict(),
-                # rounded as the report prints them: a page drawn from the JSON reads the same
-                # as one drawn from the computed result
-                **{k: shown_seconds(v) for k, v in self.stage_seconds.items()},
-            },
-            **entry(self.provenance),
-        }
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> DesignResult:
@@ -212,10 +175,3 @@ def _float(v: Any) -> float:
 
 def _float_or_none(v: Any) -> float | None:
     return None if v is None else float(v)
-
-
-def _num(v: Any) -> float | None:
-    if v is None:
-        return None
-    v = float(v)
-    return v if math.isfinite(v) else None

@@ -62,18 +62,6 @@ class Trial:
         values = {**self.__dict__, **changes}
         return Trial(**values)  # type: ignore[arg-type]
 
-    def to_dict(self, input_name: str) -> dict[str, object]:
-        """Return the contract's ``experiment`` block."""
-        return {
-            "input": self.family,
-            "input_variable": input_name,
-            "settings": {k: _round(v) for k, v in self.settings.items()},
-            "duration": _round(self.duration),
-            "rate_hz": _round(self.rate_hz),
-            "outputs": list(self.outputs),
-            "fixed": {k: _round(v) for k, v in self.fixed.items()},
-        }
-
     @property
     def label(self) -> str:
         """Short human-readable name."""
@@ -201,7 +189,3 @@ def sample_trials(space: Space, rng: np.random.Generator) -> list[Trial]:
                     Trial(family, settings, duration, float(rate), tuple(space.outputs), fixed)
                 )
     return out
-
-
-def _round(v: float) -> float:
-    return float(f"{v:.6g}")

@@ -54,16 +54,6 @@ class Verification:
         w = np.array([self.median_width(n) for n in self.widths])
         return float(np.exp(np.mean(np.log(np.maximum(w, 1e-300)))))
 
-    def to_dict(self) -> dict[str, object]:
-        """Return the JSON form."""
-        return {
-            "draws": self.draws,
-            "identifiable": dict(self.identifiable),
-            "open_ended": dict(self.open_ended),
-            "median_width": {n: self.median_width(n) for n in self.widths},
-            "width_unit": "decades (log-scaled parameters); open ends at the bound",
-        }
-
 
 def noisy_problem(
     model: FmuModel,

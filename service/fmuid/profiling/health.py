@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any
 
 import numpy as np
 
@@ -14,9 +13,11 @@ from fmuid.errors import FmuError, FmuidError
 from fmuid.estimation.optimize import safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
+from fmuid.estimation.schema import Written
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.model.simulator import Simulator
 from fmuid.model.smoke import held_parameters
+from fmuid.profiling.schema import HealthOut
 from fmuid.progress import Progress, ProgressCallback
 
 log = logging.getLogger(__name__)
@@ -38,8 +39,10 @@ NOISY_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
-class Health:
+class Health(Written):
     """What the health check found (reported under ``checks.health`` in the profile result).
+
+    ``to_dict`` writes :class:`~fmuid.profiling.schema.HealthOut`.
 
     Attributes
     ----------
@@ -77,6 +80,8 @@ class Health:
     simulations: int = 0
     no_effect: tuple[str, ...] = ()
 
+    schema = HealthOut
+
     @property
     def smooth(self) -> bool:
         """Whether the objective is deterministic and smooth enough for the default steps.
@@ -90,21 +95,6 @@ class Health:
     def noise_floor_chi2(self) -> float:
         """The largest jump of chi2 along any one parameter (chi2 units)."""
         return max(self.chi2_noise.values(), default=0.0)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form of the check."""
-        return {
-            "smooth": self.smooth,
-            "deterministic": self.deterministic,
-            "reset_matches_fresh": self.reset_matches_fresh,
-            "noise_floor": dict(self.noise_floor),
-            "jumps": dict(self.jumps),
-            "chi2_noise": dict(self.chi2_noise),
-            "noise_floor_chi2": self.noise_floor_chi2,
-            "diff_step": self.diff_step,
-            "simulations": self.simulations,
-            "no_effect": list(self.no_effect),
-        }
 
 
 class _Meter:

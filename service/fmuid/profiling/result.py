@@ -5,8 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from fmuid.estimation.result import SCHEMA_VERSION, Cost, FitResult
-from fmuid.provenance import Provenance, entry
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.schema import Written
+from fmuid.profiling.schema import ProfileResultOut
+from fmuid.provenance import Provenance
 
 if TYPE_CHECKING:
     from fmuid.estimation.problem import Problem
@@ -40,18 +42,6 @@ class ProfilePoint:
     params: dict[str, float]
     at_bound: tuple[str, ...] = ()
     error: str | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form of the point."""
-        out: dict[str, Any] = {
-            "value": float(self.value),
-            "chi2": None if self.error else float(self.chi2),
-            "params": {k: float(v) for k, v in self.params.items()},
-            "at_bound": list(self.at_bound),
-        }
-        if self.error:
-            out["error"] = self.error
-        return out
 
 
 @dataclass(frozen=True)
@@ -102,20 +92,6 @@ class ProfileQuality:
             self.check_simulations + other.check_simulations,
         )
 
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form of the record."""
-        return {
-            "checks": self.checks,
-            "starts": self.starts,
-            "jumps": self.jumps,
-            "lower_valleys": self.lower_valleys,
-            "rewalks": self.rewalks,
-            "end_refits": self.end_refits,
-            "unsettled": bool(self.unsettled),
-            "unsettled_reasons": list(self.unsettled),
-            "check_simulations": self.check_simulations,
-        }
-
 
 @dataclass(frozen=True)
 class ParameterProfile:
@@ -139,30 +115,15 @@ class ParameterProfile:
     status_reason: str = ""
     quality: ProfileQuality = ProfileQuality()
 
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form of the parameter's entry."""
-        out: dict[str, Any] = {
-            "estimate": float(self.estimate),
-            "lower": float(self.lower),
-            "upper": float(self.upper),
-            "scale": self.scale,
-            "ci": {
-                "simultaneous": [_num(v) for v in self.ci_simultaneous],
-                "pointwise": [_num(v) for v in self.ci_pointwise],
-            },
-            "status": self.status,
-            "status_reason": self.status_reason,
-            "quality": self.quality.to_dict(),
-            "profile": [p.to_dict() for p in self.points],
-        }
-        if self.limited_by:
-            out["limited_by"] = list(self.limited_by)
-        return out
-
 
 @dataclass(frozen=True)
-class ProfileResult:
-    """Profiles of every free parameter around the best fit."""
+class ProfileResult(Written):
+    """Profiles of every free parameter around the best fit.
+
+    ``to_dict`` writes the JSON of :class:`~fmuid.profiling.schema.ProfileResultOut`.
+    """
+
+    schema = ProfileResultOut
 
     fit: FitResult
     confidence: float
@@ -182,35 +143,6 @@ class ProfileResult:
     def chi2(self) -> float:
         """Chi2 at the optimum."""
         return self.fit.chi2
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the JSON form of the contract."""
-        return {
-            "kind": "profile",
-            "schema_version": SCHEMA_VERSION,
-            "fmu": {
-                "sha256": self.fit.fmu_sha256,
-                "model_name": self.fit.model_name,
-                **self.fit.fmu_info,
-            },
-            "n_data": self.fit.n_data,
-            "chi2": float(self.fit.chi2),
-            "confidence": self.confidence,
-            "thresholds": dict(self.thresholds),
-            "sigma": {k: float(v) for k, v in self.fit.sigma.items()},
-            "sigma_method": dict(self.fit.sigma_method),
-            "parameters": {
-                n: {**p.to_dict(), "unit": self.fit.units.get(n, "")}
-                for n, p in self.parameters.items()
-            },
-            "better_optimum_found": self.better_optimum_found,
-            "structural_check": self.structural_check,
-            "checks": self.checks,
-            "cost": self.cost.to_dict(),
-            "units": dict(self.fit.units),
-            **entry(self.provenance),
-            **self.fit.validation_dict(),
-        }
 
     def to_frame(self) -> Any:
         """Return a pandas table: estimate, both intervals, label and unit per parameter.
@@ -273,7 +205,3 @@ class ProfileResult:
         from fmuid.frames import pandas_module
 
         return pandas_module().DataFrame(self.path_rows())
-
-
-def _num(v: float | None) -> float | None:
-    return None if v is None else float(v)

@@ -7,7 +7,6 @@ import re
 from typing import Any
 
 from fmuid.discrepancy.catalogue import study_catalogue
-from fmuid.discrepancy.result import verdict
 from fmuid.discrepancy.series import diagnosis_series
 from fmuid.errors import FmuidError
 from fmuid.estimation.problem import Problem
@@ -183,7 +182,7 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
     units.update(d.get("units") or {})
     added = d.get("added_parameters") or {}
     units.update({n: a["unit"] for n, a in added.items() if a.get("unit")})
-    page.verdict([_readable(d.get("verdict") or verdict(d)), _readable(d.get("description"))])
+    page.verdict([_readable(diagnosis.verdict()), _readable(d.get("description"))])
     page.heading("Summary")
     if d.get("mismatch"):
         _mismatch_summary(page, d, units)

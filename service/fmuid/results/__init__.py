@@ -27,18 +27,18 @@ from fmuid.discrepancy.result import (
 )
 from fmuid.discrepancy.words import RENAMED, RENAMED_PARAMETERS
 from fmuid.errors import SpecError
-from fmuid.estimation.result import SCHEMA_VERSION, Cost, FitResult
+from fmuid.estimation.result import Cost, FitResult
+from fmuid.estimation.schema import SCHEMA_VERSION, FitResultOut, ValidationOut, read_model
+from fmuid.estimation.validation import ValidationEntry
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
-from fmuid.provenance import read
-from fmuid.results.schema import (
-    KINDS,
-    DiagnosisOut,
-    FitResultOut,
+from fmuid.profiling.schema import (
     ProfileParameterOut,
     ProfilePointOut,
     ProfileResultOut,
     QualityOut,
 )
+from fmuid.provenance import read
+from fmuid.results.schema import KINDS
 
 logger = logging.getLogger(__name__)
 
@@ -162,12 +162,25 @@ def result_from_dict(data: dict[str, Any]) -> Any:
     return _BUILDERS[data["kind"]](data)
 
 
+def known(data: dict[str, Any]) -> dict[str, Any]:
+    """Return a result's JSON as its kind's schema reads it (fields of another version dropped).
+
+    Raises
+    ------
+    pydantic.ValidationError
+        If it does not match its kind's schema, naming the field.
+
+    """
+    data = current(data)
+    model = read_model(KINDS[data["kind"]], data)
+    return {**model.model_dump(mode="json", exclude_unset=True), "kind": data["kind"]}
+
+
 def _design_from_dict(data: dict[str, Any]) -> Any:
     # imported on first use: the design package is only needed for design results
     from fmuid.experiment_design.result import DesignResult
 
-    KINDS["design"].model_validate(data)
-    return DesignResult.from_dict(data)
+    return DesignResult.from_dict(known(data))
 
 
 def _cost(data: dict[str, Any] | None) -> Cost:
@@ -179,7 +192,8 @@ def fit_from_dict(data: dict[str, Any]) -> FitResult:
     """Build a :class:`FitResult` from ``FitResult.to_dict()`` (or a profile's JSON)."""
     data = current(data)
     model = ProfileResultOut if data["kind"] == "profile" else FitResultOut
-    return _fit(model.model_validate(data), data)
+    m = read_model(model, data)
+    return _fit(m, m.model_dump(mode="json", exclude_unset=True))
 
 
 def _fit(m: FitResultOut | ProfileResultOut, data: dict[str, Any]) -> FitResult:
@@ -207,6 +221,13 @@ def _fit(m: FitResultOut | ProfileResultOut, data: dict[str, Any]) -> FitResult:
         fmu_info=fmu,
         units={**m.units, **{n: params[n].unit for n in names if params[n].unit}},
         provenance=read(data),
+        validation=tuple(_validation(v) for v in m.validation),
+    )
+
+
+def _validation(v: ValidationOut) -> ValidationEntry:
+    return ValidationEntry(
+        v.experiment, v.output, v.n, v.rms_base, v.rms_final, tuple(v.rms_by_step)
     )
 
 
@@ -253,7 +274,8 @@ def _profile(name: str, p: ProfileParameterOut) -> ParameterProfile:
 def profile_from_dict(data: dict[str, Any]) -> ProfileResult:
     """Build a :class:`ProfileResult` from ``ProfileResult.to_dict()``."""
     data = current(data)
-    m = ProfileResultOut.model_validate(data)
+    m = read_model(ProfileResultOut, data)
+    data = m.model_dump(mode="json", exclude_unset=True)
     return ProfileResult(
         fit=_fit(m, data),
         confidence=m.confidence,
@@ -262,7 +284,7 @@ def profile_from_dict(data: dict[str, Any]) -> ProfileResult:
         better_optimum_found=m.better_optimum_found,
         structural_check=dict(data["structural_check"]),
         cost=Cost(m.cost.simulations, m.cost.seconds),
-        checks=dict(m.checks),
+        checks=dict(data.get("checks", {})),
         provenance=read(data),
     )
 
@@ -322,8 +344,7 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
     Effect and parameter names of earlier versions read as today's (``sensor_lag`` as
     ``output_lag``, ``tau_sensor`` as ``tau_outputs``).
     """
-    data = current(data)
-    DiagnosisOut.model_validate(data)
+    data = known(data)
     params = data.get("parameters", {})
     return Diagnosis(
         mismatch=bool(data["mismatch"]),
@@ -368,7 +389,9 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         units=dict(data.get("units", {})),
         discriminating_experiment=data.get("discriminating_experiment"),
         effects=tuple(_step(e) for e in data.get("effects", ())),
-        validation=tuple(data.get("validation", ())),
+        validation=tuple(
+            _validation(ValidationOut.model_validate(v)) for v in data.get("validation", ())
+        ),
         provenance=read(data),
     )
 
