@@ -95,6 +95,10 @@ class CandidateScore(Block):
     p_adjusted: float = 1.0
     fitted: bool = True
 
+    def model_post_init(self, context: Any, /) -> None:
+        """Write every field (it is an object of the result, not a block read from a dict)."""
+        self.model_fields_set.update(type(self).model_fields)
+
 
 class AddedOut(Block):
     """Estimate and profile-likelihood interval of an added parameter."""
@@ -178,16 +182,21 @@ class LocationOut(Block):
 
 
 class TieOut(Block):
-    """A candidate (or the generic error model) that explains the data as well as the named."""
+    """A candidate (or the generic error model) that explains the data as well as the named.
+
+    Results of earlier versions name only the effect and its parameters.
+    """
 
     effect: str
-    model: str | None = None
+    model: str | None = Field(default=None, description="The generic error model's words.")
     parameters: dict[str, float] = {}
-    chi2: float
-    test: Literal["equal_predictions", "vuong"]
-    statistic: float
-    p_value: float
-    max_difference_sigma: float
+    chi2: float | None = None
+    test: Literal["equal_predictions", "vuong"] | None = None
+    statistic: float | None = None
+    p_value: float | None = None
+    max_difference_sigma: float | None = Field(
+        default=None, description="Largest difference of the two predictions [sigma]."
+    )
     intervals: dict[str, AddedOut] = {}
     expected_separation: float | None = None
 
@@ -353,7 +362,7 @@ class DiagnosisOut(ResultBlock):
             verdict=obj.verdict(),
             mismatch=obj.mismatch,
             evidence=list(obj.evidence),
-            location=LocationOut.model_validate(obj.location),
+            location=obj.location,  # type: ignore[arg-type]
             effect=obj.effect,
             description=obj.description,
             candidates=list(obj.candidates),
@@ -361,7 +370,7 @@ class DiagnosisOut(ResultBlock):
             chi2_before=obj.chi2_before,
             chi2_after=obj.chi2_after,
             parameters=params,
-            fmu=FmuRefOut.model_validate(obj.fmu),
+            fmu=obj.fmu,  # type: ignore[arg-type]
             n_data=obj.n_data,
             false_alarm=obj.false_alarm,
             second_effect=obj.second_effect,

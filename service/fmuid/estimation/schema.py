@@ -110,6 +110,7 @@ class FmuOut(Block):
     fmi_version: str | None = omitted_if_none()
     interface: str | None = omitted_if_none()
     input_handling: str | None = omitted_if_none()
+    instances: str | None = omitted_if_none("How runs share FMU instances (reset or fresh).")
 
     @classmethod
     def of(cls, obj: Any) -> Self:

@@ -185,7 +185,7 @@ class DesignResultOut(ResultBlock):
                 NotIdentifiableOut(parameters=c["parameters"], meaning=c["meaning"])
                 for c in obj.not_identifiable_by_any
             ],
-            tradeoffs={k: TradeoffOut.model_validate(v) for k, v in obj.tradeoffs.items()},
+            tradeoffs=obj.tradeoffs,  # type: ignore[arg-type]
             screened=obj.screened,
             cost=DesignCostOut(simulations=cost.simulations, seconds=cost.seconds, **stages),
             provenance=obj.provenance,
