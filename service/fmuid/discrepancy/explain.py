@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from scipy import stats
 
@@ -13,6 +13,9 @@ from fmuid.discrepancy.result import AddedEstimate, EffectStep
 from fmuid.discrepancy.settle import settles
 from fmuid.experiment_design.discriminate import Discrimination
 from fmuid.readable import p_text
+
+if TYPE_CHECKING:
+    from fmuid.estimation.validation import ValidationEntry
 
 
 def _fmt_ci(e: AddedEstimate) -> str:
@@ -92,12 +95,9 @@ def explained(
     return out
 
 
-def held_out(entries: Sequence[Mapping[str, Any]]) -> str:
+def held_out(entries: Sequence[ValidationEntry]) -> str:
     """Sentence on the held-out data: RMS simulation error before and after."""
-    parts = [
-        f"{e['output']} in {e['experiment']} {e['rms_base']:.3g} -> {e['rms_final']:.3g}"
-        for e in entries
-    ]
+    parts = [f"{e.output} in {e.experiment} {e.rms_base:.3g} -> {e.rms_final:.3g}" for e in entries]
     if not parts:
         return ""
     return f" Held-out data, RMS simulation error (output units): {'; '.join(parts)}."

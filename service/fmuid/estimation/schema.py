@@ -219,22 +219,24 @@ class FitResultOut(EstimatedBlock):
     def of(cls, obj: FitResult) -> Self:
         """Build it from a :class:`~fmuid.estimation.result.FitResult`."""
         on_bound = obj.space.at_bound(obj.z_estimate())
-        return cls(
-            **cls.fields_of(obj),
-            parameters={
-                n: FitParameterOut(
-                    estimate=obj.estimates[n],
-                    lower=obj.lower[n],
-                    upper=obj.upper[n],
-                    scale=s,
-                    unit=obj.units.get(n, ""),
-                    at_bound=n in on_bound,
-                )
-                for n, s in zip(obj.names, obj.scales, strict=True)
-            },
-            fixed=obj.fixed,
-            global_search=obj.global_search,
-            message=obj.message,
-            cost=CostOut.of(obj.cost),
-            provenance=obj.provenance,
+        return cls.model_validate(
+            {
+                **cls.fields_of(obj),
+                "parameters": {
+                    n: {
+                        "estimate": obj.estimates[n],
+                        "lower": obj.lower[n],
+                        "upper": obj.upper[n],
+                        "scale": s,
+                        "unit": obj.units.get(n, ""),
+                        "at_bound": n in on_bound,
+                    }
+                    for n, s in zip(obj.names, obj.scales, strict=True)
+                },
+                "fixed": obj.fixed,
+                "global_search": obj.global_search,
+                "message": obj.message,
+                "cost": CostOut.of(obj.cost),
+                "provenance": obj.provenance,
+            }
         )

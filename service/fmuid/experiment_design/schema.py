@@ -177,18 +177,20 @@ class DesignResultOut(ResultBlock):
         """Build it from a :class:`~fmuid.experiment_design.result.DesignResult`."""
         cost = CostOut.of(obj.cost)
         stages = {k: shown_seconds(v) for k, v in obj.stage_seconds.items()}
-        return cls(
-            fmu=FmuOut(sha256=obj.fmu_sha256, model_name=obj.model_name),
-            criterion=obj.criterion,  # type: ignore[arg-type]
-            designs=[DesignOut.of_design(d, obj.input_name) for d in obj.designs],
-            not_identifiable_by_any=[
-                NotIdentifiableOut(parameters=c["parameters"], meaning=c["meaning"])
-                for c in obj.not_identifiable_by_any
-            ],
-            tradeoffs=obj.tradeoffs,  # type: ignore[arg-type]
-            screened=obj.screened,
-            cost=DesignCostOut(simulations=cost.simulations, seconds=cost.seconds, **stages),
-            provenance=obj.provenance,
+        return cls.model_validate(
+            {
+                "fmu": FmuOut(sha256=obj.fmu_sha256, model_name=obj.model_name),
+                "criterion": obj.criterion,
+                "designs": [DesignOut.of_design(d, obj.input_name) for d in obj.designs],
+                "not_identifiable_by_any": [
+                    NotIdentifiableOut(parameters=c["parameters"], meaning=c["meaning"])
+                    for c in obj.not_identifiable_by_any
+                ],
+                "tradeoffs": obj.tradeoffs,
+                "screened": obj.screened,
+                "cost": DesignCostOut(simulations=cost.simulations, seconds=cost.seconds, **stages),
+                "provenance": obj.provenance,
+            }
         )
 
 

@@ -184,17 +184,19 @@ class ProfileResultOut(EstimatedBlock):
     def of(cls, obj: ProfileResult) -> Self:
         """Build it from a :class:`~fmuid.profiling.result.ProfileResult`."""
         units = obj.fit.units
-        return cls(
-            **cls.fields_of(obj.fit),
-            confidence=obj.confidence,
-            thresholds=obj.thresholds,  # type: ignore[arg-type]
-            parameters={
-                n: ProfileParameterOut.of_profile(p, units.get(n, ""))
-                for n, p in obj.parameters.items()
-            },
-            better_optimum_found=obj.better_optimum_found,
-            structural_check=obj.structural_check,  # type: ignore[arg-type]
-            checks=obj.checks,  # type: ignore[arg-type]
-            cost=CostOut.of(obj.cost),
-            provenance=obj.provenance,
+        return cls.model_validate(
+            {
+                **cls.fields_of(obj.fit),
+                "confidence": obj.confidence,
+                "thresholds": obj.thresholds,
+                "parameters": {
+                    n: ProfileParameterOut.of_profile(p, units.get(n, ""))
+                    for n, p in obj.parameters.items()
+                },
+                "better_optimum_found": obj.better_optimum_found,
+                "structural_check": obj.structural_check,
+                "checks": obj.checks,
+                "cost": CostOut.of(obj.cost),
+                "provenance": obj.provenance,
+            }
         )

@@ -182,7 +182,7 @@ def diagnosis_sections(page: HtmlPage, diagnosis: Any, problem: Problem | None) 
     units.update(d.get("units") or {})
     added = d.get("added_parameters") or {}
     units.update({n: a["unit"] for n, a in added.items() if a.get("unit")})
-    page.verdict([_readable(diagnosis.verdict()), _readable(d.get("description"))])
+    page.verdict([_readable(d.get("verdict", "")), _readable(d.get("description"))])
     page.heading("Summary")
     if d.get("mismatch"):
         _mismatch_summary(page, d, units)
