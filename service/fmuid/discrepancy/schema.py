@@ -175,9 +175,7 @@ class LocationOut(Block):
     experiments: list[str] = []
     time_windows: list[tuple[float, float]] = []
     frequency_hz: tuple[float, float] | None = None
-    chi2_gain: dict[str, float] = Field(
-        default={}, description="Chi2 the effect removes per ``experiment/output``."
-    )
+    chi2_gain: dict[str, float] = Field(default={}, description="Per ``experiment/output``.")
     levels: dict[str, LevelOut] = {}
 
 
@@ -194,9 +192,7 @@ class TieOut(Block):
     test: Literal["equal_predictions", "vuong"] | None = None
     statistic: float | None = None
     p_value: float | None = None
-    max_difference_sigma: float | None = Field(
-        default=None, description="Largest difference of the two predictions [sigma]."
-    )
+    max_difference_sigma: float | None = Field(default=None, description="[sigma]")
     intervals: dict[str, AddedOut] = {}
     expected_separation: float | None = None
 
@@ -334,9 +330,7 @@ class DiagnosisOut(ResultBlock):
     lrt_p_value: float | None = None
     bic_before: float = 0.0
     bic_after: float = 0.0
-    whiteness_before: dict[str, float] = Field(
-        default={}, description="Ljung-Box p-value per ``experiment/output``."
-    )
+    whiteness_before: dict[str, float] = Field(default={}, description="Ljung-Box p-values.")
     whiteness_after: dict[str, float] = {}
     windows: list[WindowOut] = []
     tests_before: list[EvidenceOut] = []

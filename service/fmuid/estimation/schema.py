@@ -73,6 +73,10 @@ class Block(BaseModel):
             log.warning("%s: fields of another version ignored: %s", cls.__name__, unknown)
         return {k: v for k, v in data.items() if k not in unknown}
 
+    def fields(self) -> dict[str, Any]:
+        """Return every field by name (those the JSON leaves out too): an object's arguments."""
+        return {name: getattr(self, name) for name in type(self).model_fields}
+
     @classmethod
     def of(cls, obj: Any) -> Self:
         """Build the block from an object, by attribute name.

@@ -25,6 +25,7 @@ from fmuid.discrepancy.result import (
     EffectStep,
     StageCost,
 )
+from fmuid.discrepancy.schema import AddedOut, EvidenceOut
 from fmuid.discrepancy.words import RENAMED, RENAMED_PARAMETERS
 from fmuid.errors import SpecError
 from fmuid.estimation.result import Cost, FitResult
@@ -172,8 +173,7 @@ def known(data: dict[str, Any]) -> dict[str, Any]:
 
     """
     data = current(data)
-    model = read_model(KINDS[data["kind"]], data)
-    return {**model.model_dump(mode="json", exclude_unset=True), "kind": data["kind"]}
+    return dict(read_model(KINDS[data["kind"]], data).model_dump(mode="json", exclude_unset=True))
 
 
 def _design_from_dict(data: dict[str, Any]) -> Any:
@@ -226,9 +226,7 @@ def _fit(m: FitResultOut | ProfileResultOut, data: dict[str, Any]) -> FitResult:
 
 
 def _validation(v: ValidationOut) -> ValidationEntry:
-    return ValidationEntry(
-        v.experiment, v.output, v.n, v.rms_base, v.rms_final, tuple(v.rms_by_step)
-    )
+    return ValidationEntry(**{**v.fields(), "rms_by_step": tuple(v.rms_by_step)})
 
 
 def _point(p: ProfilePointOut) -> ProfilePoint:
@@ -289,20 +287,8 @@ def profile_from_dict(data: dict[str, Any]) -> ProfileResult:
     )
 
 
-def _interval(pair: list[float | None]) -> tuple[float | None, float | None]:
-    lo, hi = pair
-    return (None if lo is None else float(lo), None if hi is None else float(hi))
-
-
 def _test(t: dict[str, Any]) -> TestResult:
-    return TestResult(
-        t["test"],
-        t.get("output"),
-        t.get("experiment"),
-        float(t["p_value"]),
-        float(t.get("statistic", 0.0)),
-        None if t.get("df") is None else float(t["df"]),
-    )
+    return TestResult(**EvidenceOut.model_validate(t).fields())
 
 
 def _renamed(data: dict[str, Any]) -> dict[str, Any]:
@@ -328,14 +314,7 @@ def _step(e: dict[str, Any]) -> EffectStep:
 
 
 def _added(v: dict[str, Any]) -> AddedEstimate:
-    return AddedEstimate(
-        float(v["estimate"]),
-        _interval(v["ci"]),
-        float(v["confidence"]),
-        v.get("unit", ""),
-        float(v["off"]),
-        bool(v["excludes_off"]),
-    )
+    return AddedEstimate(**AddedOut.model_validate(v).fields())
 
 
 def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
@@ -389,9 +368,7 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         units=dict(data.get("units", {})),
         discriminating_experiment=data.get("discriminating_experiment"),
         effects=tuple(_step(e) for e in data.get("effects", ())),
-        validation=tuple(
-            _validation(ValidationOut.model_validate(v)) for v in data.get("validation", ())
-        ),
+        validation=tuple(_validation(ValidationOut(**v)) for v in data.get("validation", ())),
         provenance=read(data),
     )
 
