@@ -141,7 +141,7 @@ def current(data: dict[str, Any]) -> dict[str, Any]:
     if isinstance(version, int) and version > SCHEMA_VERSION:
         logger.warning(
             "result schema version %s is newer than this fmuid's %s: fields it does not know "
-            "are kept untyped",
+            "are left out",
             version,
             SCHEMA_VERSION,
         )
