@@ -12,6 +12,7 @@ from fmuid.discrepancy.decide import Tie
 from fmuid.discrepancy.effects import DeclaredPhysics, Effect
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
+from fmuid.discrepancy.schema import TieOut
 from fmuid.discrepancy.settle import hypothesis_names
 from fmuid.estimation.validation import ValidationEntry
 from fmuid.results import result_from_dict
@@ -70,7 +71,10 @@ def test_a_generic_error_model_that_fits_as_well_is_said() -> None:
     assert "outside the catalogue (Laguerre filters) explains the data as well" in text
     assert "Vuong p = 0.65" in text
     found = _mismatch(
-        effect="tire_saturation", lrt_p_value=1e-5, indistinguishable=(rival,), effects=(named,)
+        effect="tire_saturation",
+        lrt_p_value=1e-5,
+        indistinguishable=(TieOut.model_validate(rival),),
+        effects=(named,),
     )
     assert found.verdict().startswith("Physics outside the catalogue explains the mismatch as well")
 

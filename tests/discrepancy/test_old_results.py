@@ -46,7 +46,7 @@ def test_old_names_read_as_todays(tmp_path: Path) -> None:
     assert d.effect == "output_lag" and d.second_effect == "input_offset"
     assert set(d.added_parameters) == {"tau_outputs"}
     assert d.candidates[0].effect == "output_bias"
-    assert d.indistinguishable[0]["parameters"] == {"tau_delta": 0.1}
+    assert d.indistinguishable[0].parameters == {"tau_delta": 0.1}
     doc = d.to_dict()
     assert doc["verdict"].startswith("output_lag explains the mismatch")
     assert doc["effects"] == [] and doc["validation"] == []

@@ -45,6 +45,7 @@ from fmuid.discrepancy.levels import level_location
 from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
 from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
 from fmuid.discrepancy.scan import CandidateFit, augmented
+from fmuid.discrepancy.schema import AbsorbedOut, CorrectionOut, TieOut
 from fmuid.discrepancy.settle import settles, settling_tests
 from fmuid.discrepancy.tasks import candidate_pool
 from fmuid.discrepancy.validate import coupling_error, validation
@@ -57,6 +58,7 @@ from fmuid.estimation.optimize import (
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
 from fmuid.estimation.series import residual_series as fit_series
+from fmuid.experiment_design.schema import DiscriminatingOut
 from fmuid.profiling.engine import profile_problem
 from fmuid.profiling.walk import WalkOptions
 from fmuid.progress import ProgressCallback
@@ -297,7 +299,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
             lrt_p_value=scores[0].p_value,
             bic_after=bic_before,
             parameters_after=dict(fit.estimates),
-            generic_correction=correction,
+            generic_correction=CorrectionOut.model_validate(correction),
             validation=tuple(checked),
             cost=cost,
             stages=stages,
@@ -385,10 +387,10 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         bic_after=final_fit.chi2 + aug.n_free * np.log(fit.n_data),
         parameters_after=dict(final_fit.estimates),
         second_effect=applied[1].effect if len(applied) > 1 else None,
-        indistinguishable=(*tied, *([rival] if rival else [])),
-        absorbed=absorbed_by,
-        discriminating_experiment=proposal.to_dict() if proposal else None,
-        generic_correction=leftover,
+        indistinguishable=tuple(map(TieOut.model_validate, (*tied, *([rival] if rival else [])))),
+        absorbed={n: AbsorbedOut.model_validate(a) for n, a in absorbed_by.items()},
+        discriminating_experiment=DiscriminatingOut.of(proposal) if proposal else None,
+        generic_correction=None if leftover is None else CorrectionOut.model_validate(leftover),
         effects=effect_steps,
         validation=tuple(checked),
         cost=cost,

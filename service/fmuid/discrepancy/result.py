@@ -7,9 +7,17 @@ from typing import TYPE_CHECKING, Any
 
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.residual_tests import TestResult, Window
-from fmuid.discrepancy.schema import AddedOut, CandidateScore, DiagnosisOut
+from fmuid.discrepancy.schema import (
+    AbsorbedOut,
+    AddedOut,
+    CandidateScore,
+    CorrectionOut,
+    DiagnosisOut,
+    TieOut,
+)
 from fmuid.estimation.result import Cost
 from fmuid.estimation.schema import Written
+from fmuid.experiment_design.schema import DiscriminatingOut
 from fmuid.provenance import Provenance
 from fmuid.readable import p_text
 
@@ -132,9 +140,9 @@ class Diagnosis(Written):
     """Outcome of ``fmuid.diagnose``: is there a mismatch, where, what explains it.
 
     ``to_dict`` writes the JSON of :class:`~fmuid.discrepancy.schema.DiagnosisOut` (the
-    contract's, plus the extra keys documented there); the dicts it holds (``location``,
-    ``indistinguishable``, ``absorbed``, ``generic_correction``,
-    ``discriminating_experiment``) are typed there.
+    contract's, plus the extra keys documented there). Its ties, absorbed parameters, generic
+    correction and discriminating experiment are that schema's blocks; ``location`` is a dict
+    (the plots and the engine read it by key) that the schema types when it is written.
     """
 
     schema = DiagnosisOut
@@ -159,16 +167,16 @@ class Diagnosis(Written):
     parameters_before: dict[str, float]
     parameters_after: dict[str, float]
     second_effect: str | None = None
-    indistinguishable: tuple[dict[str, Any], ...] = ()
-    generic_correction: dict[str, Any] | None = None
-    absorbed: dict[str, Any] = field(default_factory=dict)
+    indistinguishable: tuple[TieOut, ...] = ()
+    generic_correction: CorrectionOut | None = None
+    absorbed: dict[str, AbsorbedOut] = field(default_factory=dict)
     scan_p_value: float | None = None
     fmu: dict[str, str] = field(default_factory=dict)
     cost: Cost = Cost(0, 0.0)
     stages: tuple[StageCost, ...] = ()
     """The cost of each step, in order (they sum to ``cost``; none in results of before 2026-11)."""
     units: dict[str, str] = field(default_factory=dict)
-    discriminating_experiment: dict[str, Any] | None = None
+    discriminating_experiment: DiscriminatingOut | None = None
     effects: tuple[EffectStep, ...] = ()
     validation: tuple[ValidationEntry, ...] = ()
     provenance: Provenance | None = None
@@ -202,7 +210,7 @@ class Diagnosis(Written):
             outputs = ", ".join(self.location.get("outputs") or []) or "the outputs"
             note = ", although the base model's residuals look like noise" if hidden else ""
             return f"A mismatch in {outputs} that no catalogue entry explains{note}."
-        ties = [str(t["effect"]) for t in self.indistinguishable]
+        ties = [t.effect for t in self.indistinguishable]
         named = [effect_of(e.effect) for e in self.effects] or [effect_of(self.effect)]
         p = self.lrt_p_value
         words = (

@@ -25,7 +25,7 @@ from fmuid.discrepancy.result import (
     EffectStep,
     StageCost,
 )
-from fmuid.discrepancy.schema import AddedOut, EvidenceOut
+from fmuid.discrepancy.schema import AddedOut, DiagnosisOut, EvidenceOut
 from fmuid.discrepancy.words import RENAMED, RENAMED_PARAMETERS
 from fmuid.errors import SpecError
 from fmuid.estimation.result import Cost, FitResult
@@ -323,7 +323,9 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
     Effect and parameter names of earlier versions read as today's (``sensor_lag`` as
     ``output_lag``, ``tau_sensor`` as ``tau_outputs``).
     """
-    data = known(data)
+    data = current(data)
+    m = read_model(DiagnosisOut, data)
+    data = m.model_dump(mode="json", exclude_unset=True)
     params = data.get("parameters", {})
     return Diagnosis(
         mismatch=bool(data["mismatch"]),
@@ -355,9 +357,9 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
         parameters_before={k: v["before"] for k, v in params.items() if v["before"] is not None},
         parameters_after={k: v["after"] for k, v in params.items() if v["after"] is not None},
         second_effect=data.get("second_effect"),
-        indistinguishable=tuple(data.get("indistinguishable", ())),
-        generic_correction=data.get("generic_correction"),
-        absorbed=dict(data.get("absorbed", {})),
+        indistinguishable=tuple(m.indistinguishable),
+        generic_correction=m.generic_correction,
+        absorbed=dict(m.absorbed),
         scan_p_value=data.get("scan_p_value"),
         fmu=dict(data.get("fmu", {})),
         cost=_cost(data.get("cost")),
@@ -366,7 +368,7 @@ def diagnosis_from_dict(data: dict[str, Any]) -> Diagnosis:
             for c in (data.get("cost") or {}).get("stages", ())
         ),
         units=dict(data.get("units", {})),
-        discriminating_experiment=data.get("discriminating_experiment"),
+        discriminating_experiment=m.discriminating_experiment,
         effects=tuple(_step(e) for e in data.get("effects", ())),
         validation=tuple(_validation(ValidationOut(**v)) for v in data.get("validation", ())),
         provenance=read(data),
