@@ -38,6 +38,7 @@ from fmuid.jobs.health import free_space_problem
 from fmuid.jobs.kinds import RunContext, runner
 from fmuid.jobs.reaper import end_tree_on_parent_death, kill_tree
 from fmuid.jobs.store import Job, JobStore, StoreError
+from fmuid.model.world import open_registry
 from fmuid.processes import become_subreaper, kill_group, limit_memory
 from fmuid.progress import Progress
 
@@ -217,7 +218,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     enforce_time_limit(store, job.id, args.timeout_s)
     try:
-        return run_job(store, job, args.memory_mb, args.dask_scheduler, args.min_free_bytes)
+        with open_registry():
+            return run_job(store, job, args.memory_mb, args.dask_scheduler, args.min_free_bytes)
     except StoreError:
         logger.exception("job %s could not record its outcome", job.id)
         return STORE_FAILED_EXIT
