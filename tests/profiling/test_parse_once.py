@@ -18,7 +18,7 @@ from fmuid.engine.cluster import PickledTask, execute_anywhere
 from fmuid.estimation.optimize import fit_problem
 from fmuid.jobs.store import Dataset, JobStore
 from fmuid.model.fmu import FmuModel
-from fmuid.model.world import FmuRegistry, registry
+from fmuid.model.world import FmuRegistry, open_registry, registry
 from fmuid.profiling.branch import BranchTask
 from fmuid.profiling.engine import thresholds
 from fmuid.profiling.walk import WalkOptions
@@ -91,10 +91,10 @@ def test_a_profile_job_parses_the_fmu_once_per_process(msd_fmu, tmp_path):
 
 def test_a_study_parses_the_fmu_once_in_process(msd_fmu):
     data = msd_step_data(**TRUTH, sigma=0.3, seed=5)
-    before = registry().parses
-    problem = make_problem(msd_fmu, [data], spec(TRUTH, 0.3, interface="co_simulation"))
-    result = fmuid.profile(msd_fmu, [data], problem.spec, problem=problem, workers=1)
-    assert registry().parses - before == 1
+    with open_registry() as world:  # as a process of its own: nothing parsed yet
+        problem = make_problem(msd_fmu, [data], spec(TRUTH, 0.3, interface="co_simulation"))
+        result = fmuid.profile(msd_fmu, [data], problem.spec, problem=problem, workers=1)
+        assert world.parses == 1
     assert result.fit.fmu_sha256 == problem.model.sha256
     assert problem.predictor.model is problem.model
 

@@ -14,7 +14,7 @@ from fmuid.errors import DataError, FmuError
 from fmuid.estimation.predictor import FmuPredictor, Predictor
 from fmuid.estimation.sigma import SPLINE_METHOD, spline_residual_sigma
 from fmuid.estimation.space import ParameterSpace
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import FmuModel, model_of_file
 
 
 class Problem:
@@ -61,7 +61,7 @@ class Problem:
         self.model = (
             model.with_interface(spec.interface)
             if model is not None
-            else FmuModel(self.fmu_path, spec.interface)
+            else model_of_file(self.fmu_path, spec.interface)
         )
         self.experiments = list(experiments)
         self.spec = spec
