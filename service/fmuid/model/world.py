@@ -21,7 +21,7 @@ import os
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Protocol, TypeVar
+from typing import TYPE_CHECKING, Protocol, TypeVar, cast
 
 if TYPE_CHECKING:
     from fmuid.model.fmu import FmuModel
@@ -107,12 +107,13 @@ class FmuRegistry:
         """Return this thread's simulator of the model ``key``, made by ``make`` on first use.
 
         A simulator that ``keep`` rejects is closed and made again; so are this thread's
-        simulators of an earlier file at the same path (a rebuilt FMU).
+        simulators of an earlier file at the same path (a rebuilt FMU). Simulators are made one
+        at a time in the process (under the registry's lock).
         """
         thread = threading.get_ident()
         with self._lock:
-            simulator = self._simulators.get((key, thread))
-            if simulator is not None and not keep(simulator):  # type: ignore[arg-type]
+            simulator = cast(S | None, self._simulators.get((key, thread)))
+            if simulator is not None and not keep(simulator):
                 self._simulators.pop((key, thread)).close()
                 simulator = None
             if simulator is None:
@@ -121,7 +122,7 @@ class FmuRegistry:
                     self._simulators.pop(old).close()
                 simulator = make()
                 self._simulators[(key, thread)] = simulator
-            return simulator  # type: ignore[return-value]
+            return simulator
 
     def forked(self) -> FmuRegistry:
         """Return the registry of a forked child: the models and verdicts, no simulators."""
