@@ -5,8 +5,8 @@ Counts every ``zipfile.ZipFile`` opened on an ``.fmu`` file or on bytes in memor
 calls them (fmuid or fmpy), in three situations of the built-in ``msd`` model:
 
 - ``parse + 2 simulators``: ``FmuModel(path)``, then ``get_simulator`` in two threads;
-- ``CLI diagnosis``: ``fmuid diagnose --workers 1`` on 51 samples of a step response (the
-  diagnosing process only);
+- ``CLI diagnosis``: ``fmuid diagnose --workers 1`` on ``examples/step.csv`` and ``spec.json``
+  (the diagnosing process only);
 - ``pool worker``: each worker of a 2-worker pool (its set-up parse, then a simulator).
 
 Each case runs in a fresh process. Run it on a tree to compare (the counts do not depend on the
@@ -29,10 +29,9 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from lxml import etree
-from scipy.integrate import solve_ivp
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 COUNTS: collections.Counter[str] = collections.Counter()
 
 
@@ -86,27 +85,8 @@ def _parse(fmu: Path, folder: Path) -> tuple[int, int]:
 def _diagnosis(fmu: Path, folder: Path) -> tuple[int, int]:
     from fmuid.cli import main
 
-    t = np.arange(0.0, 10.0 + 1e-9, 0.2)
-    sol = solve_ivp(
-        lambda _t, y: [y[1], (40.0 - 1.6 * y[1] - 4.4 * y[0]) / 1.1],
-        (0, 10),
-        [0, 0],
-        t_eval=t,
-        rtol=1e-11,
-        atol=1e-12,
-    )
-    x = sol.y[0] + np.random.default_rng(3).normal(0, 0.1, t.size)
-    rows = ["time,f,x"] + [f"{a:.3f},40,{b:.9f}" for a, b in zip(t, x, strict=True)]
-    (folder / "step.csv").write_text("\n".join(rows) + "\n")
-    start = {"m": 1.1, "k": 4.4, "b": 1.6}
-    spec = {
-        "parameters": {n: {"start": v, "lower": 0.01, "upper": 5.0} for n, v in start.items()},
-        "inputs": ["f"],
-        "outputs": {"x": {"sigma": 0.1}},
-    }
-    (folder / "spec.json").write_text(json.dumps(spec))
-    args = ["diagnose", "--fmu", str(fmu), "--data", str(folder / "step.csv")]
-    args += ["--spec", str(folder / "spec.json"), "--out", str(folder / "d.json")]
+    args = ["diagnose", "--fmu", str(fmu), "--data", str(EXAMPLES / "step.csv")]
+    args += ["--spec", str(EXAMPLES / "spec.json"), "--out", str(folder / "d.json")]
     if main([*args, "--workers", "1"]) != 0:
         raise SystemExit("the diagnosis failed")
     return _seen()
