@@ -7,10 +7,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import io
 import logging
-import posixpath
-import zipfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +17,7 @@ from fmpy.model_description import ModelDescription
 
 from fmuid.errors import FmuError
 from fmuid.model.annotations import fmuid_annotation_of
-from fmuid.model.description import read_description
+from fmuid.model.archive import open_archive, read_description
 from fmuid.model.variable import USABLE, Variable, from_fmpy
 from fmuid.model.world import registry
 
@@ -41,7 +38,6 @@ co-simulation when the FMU has it, else model exchange."""
 SPEC_NAMES = {CO_SIMULATION: "co_simulation", MODEL_EXCHANGE: "model_exchange"}
 """The spec's name of each FMI interface."""
 
-MODEL_DESCRIPTION = "modelDescription.xml"
 BINARY_DIR = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
 _ROLE_HELP = {
     "parameters": "only Real/Float parameters can be fitted; set others under 'fixed'",
@@ -54,45 +50,6 @@ _FIXED_HELP = {
     "integer": "give it a whole number",
     "boolean": "give it 0 or 1",
 }
-
-
-@dataclass(frozen=True)
-class _Archive:
-    """What one read of an FMU file gives: its bytes, the zip opened on them, the description."""
-
-    data: bytes
-    zip: zipfile.ZipFile
-    """The archive, opened once on ``data`` (in memory); simulators extract it from here."""
-    xml: bytes | None
-    """``modelDescription.xml``, or None when the archive has none."""
-
-
-def _read_archive(path: Path) -> _Archive:
-    """Read the file once and open its zip directory once, in memory; check the entry names."""
-    if not path.is_file():
-        raise FmuError(f"FMU {path} does not exist")
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise FmuError(f"FMU {path} cannot be read: {exc}") from exc
-    try:
-        archive = zipfile.ZipFile(io.BytesIO(data))
-        names = archive.namelist()
-        _check_names(path, names)
-        xml = archive.read(MODEL_DESCRIPTION) if MODEL_DESCRIPTION in names else None
-    except (zipfile.BadZipFile, OSError) as exc:
-        raise FmuError(f"{path} is not an FMU: it is not a readable zip archive ({exc})") from exc
-    return _Archive(data, archive, xml)
-
-
-def _check_names(path: Path, names: list[str]) -> None:
-    """Refuse entries that would escape the extraction directory."""
-    for name in names:
-        normalized = posixpath.normpath(name.replace("\\", "/"))
-        if name.startswith(("/", "\\")) or normalized == ".." or normalized.startswith("../"):
-            raise FmuError(f"{path}: archive entry {name!r} escapes the extraction directory")
-        if len(name) > 1 and name[1] == ":":
-            raise FmuError(f"{path}: archive entry {name!r} is an absolute Windows path")
 
 
 @dataclass(frozen=True)
@@ -129,9 +86,8 @@ def load_model(file: FmuFile) -> FmuModel:
 def model_of_file(path: str | Path, interface: str | None = None) -> FmuModel:
     """Return this process's model of the file at ``path``, parsed again when the file changes.
 
-    A caller that holds only the path (a script simulating in a loop, a stage given a file)
-    gets the model parsed at the file's first use; a change of the file's modification time or
-    size makes it parse the file again.
+    For a caller that holds only the path (a script simulating in a loop, a stage given a
+    file); a change of the file's modification time or size makes it parse the file again.
 
     Raises
     ------
@@ -172,6 +128,9 @@ class FmuModel:
         The ``.fmu`` file.
     sha256
         SHA-256 hex digest of the file.
+    data
+        The file's bytes, as read and hashed (its zip, opened on them once, is unpacked for
+        each simulator by :meth:`extract`).
     model_name, fmi_version, guid, model_identifier
         From ``modelDescription.xml`` (``guid`` is the FMI 3.0 ``instantiationToken``).
     interface
@@ -197,7 +156,7 @@ class FmuModel:
         self, path: str | Path, interface: str | None = None, *, sha256: str | None = None
     ) -> None:
         self.path = Path(path)
-        archive = _read_archive(self.path)
+        archive = open_archive(self.path)
         self.sha256 = hashlib.sha256(archive.data).hexdigest()
         registry().count_parse()
         if sha256 is not None and sha256 != self.sha256:
@@ -209,7 +168,6 @@ class FmuModel:
         parsed = read_description(self.path, archive.xml)
         description = parsed.fmpy
         self.data = archive.data
-        """The file's bytes, as read and hashed."""
         self._zip = archive.zip
         self.annotation: Any = fmuid_annotation_of(parsed.root)
         """The ``<Model>`` element of the FMU's ``fmuid`` vendor annotation, or None."""

@@ -1,4 +1,8 @@
-"""``modelDescription.xml`` parsed once: fmpy's model description and the element tree it read.
+"""An FMU file read once: its bytes, its zip opened once in memory, its description parsed once.
+
+:func:`open_archive` reads the file and opens its zip directory on the bytes in memory (the
+model keeps it: simulators unpack their copies from it). :func:`read_description` parses
+``modelDescription.xml`` once.
 
 fmpy reads a model description from an FMU by opening the zip again and parsing the XML into
 objects it keeps, dropping the tree; fmuid also needs the tree (the FMI version before fmpy
@@ -11,7 +15,10 @@ per thread) one that builds the tree fmpy reads and keeps its root for the calle
 
 from __future__ import annotations
 
+import io
+import posixpath
 import tempfile
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,8 +29,50 @@ from lxml import etree
 
 from fmuid.errors import FmuError
 
+MODEL_DESCRIPTION = "modelDescription.xml"
 SUPPORTED = ("2.0", "3.0")
 """The FMI versions fmuid runs."""
+
+
+@dataclass(frozen=True)
+class Archive:
+    """What one read of an FMU file gives: its bytes, the zip opened on them, the description."""
+
+    data: bytes
+    zip: zipfile.ZipFile
+    """The archive, opened once on ``data`` (in memory); simulators extract it from here."""
+    xml: bytes | None
+    """``modelDescription.xml``, or None when the archive has none."""
+
+
+def open_archive(path: Path) -> Archive:
+    """Read the file once and open its zip directory once, in memory; check the entry names."""
+    if not path.is_file():
+        raise FmuError(f"FMU {path} does not exist")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise FmuError(f"FMU {path} cannot be read: {exc}") from exc
+    try:
+        archive = zipfile.ZipFile(io.BytesIO(data))
+        names = archive.namelist()
+        _check_names(path, names)
+        xml = archive.read(MODEL_DESCRIPTION) if MODEL_DESCRIPTION in names else None
+    except zipfile.BadZipFile as exc:
+        raise FmuError(f"{path} is not an FMU: it is not a zip archive ({exc})") from exc
+    except OSError as exc:
+        raise FmuError(f"{path} is not a readable zip archive: {exc}") from exc
+    return Archive(data, archive, xml)
+
+
+def _check_names(path: Path, names: list[str]) -> None:
+    """Refuse entries that would escape the extraction directory."""
+    for name in names:
+        normalized = posixpath.normpath(name.replace("\\", "/"))
+        if name.startswith(("/", "\\")) or normalized == ".." or normalized.startswith("../"):
+            raise FmuError(f"{path}: archive entry {name!r} escapes the extraction directory")
+        if len(name) > 1 and name[1] == ":":
+            raise FmuError(f"{path}: archive entry {name!r} is an absolute Windows path")
 
 
 @dataclass(frozen=True)
