@@ -2,14 +2,14 @@
 
 tau1 h1' = K u - h1, tau2 h2' = h1 - h2, h1(0) = h1_0, h2(0) = h2_0: the levels at the start
 of a record are parameters, as an FMU written for a real plant exposes its initial states. Each
-step is integrated by classical Runge-Kutta with sub-steps of at most 0.01 s.
+step is integrated by classical Runge-Kutta with sub-steps of at most 0.025 s.
 """
 
 import math
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 
-SUB_STEP = 0.01
+SUB_STEP = 0.025
 
 
 class TwoTanks(Fmi2Slave):
