@@ -79,8 +79,7 @@ def residuals(x: np.ndarray, data: list[Experiment]) -> np.ndarray:
     states = {"a.csv": (h1a, h2a), "b.csv": (h1b, h2b)}
     return np.concatenate(
         [
-            (e.columns["h2"] - level(k, tau1, tau2, *states[e.name], RECORDS[e.name][0]))
-            / SIGMA
+            (e.columns["h2"] - level(k, tau1, tau2, *states[e.name], RECORDS[e.name][0])) / SIGMA
             for e in data
         ]
     )
@@ -129,9 +128,7 @@ def test_each_record_gets_its_own_initial_state_and_the_test_record_too(two_tank
         return test.columns["h2"] - level(*shared, *h, u)
 
     states = least_squares(misfit, [1.0, 1.0], bounds=bounds(["h1_0", "h2_0"]), xtol=1e-14).x
-    assert [entry["initial_states"][n] for n in ("h1_0", "h2_0")] == pytest.approx(
-        states, abs=1e-4
-    )
+    assert [entry["initial_states"][n] for n in ("h1_0", "h2_0")] == pytest.approx(states, abs=1e-4)
     rms = float(np.sqrt(np.mean(misfit(states) ** 2)))
     assert entry["rms_base"] == pytest.approx(rms, rel=1e-4)
     assert entry["rms_base"] < 1.2 * SIGMA  # the noise: the record's start is found

@@ -77,7 +77,7 @@ def for_experiment(
     """
     if not per_experiment:
         return dict(params)
-    out = {}
+    out: dict[str, V] = {}
     for key, value in params.items():
         found = split(key, per_experiment)
         if found is None:
