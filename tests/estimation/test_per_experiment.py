@@ -17,9 +17,11 @@ from scipy.stats import chi2 as chi2_dist
 import fmuid
 from fmuid.data import Experiment, experiment_from_arrays, spec_from_json
 from fmuid.discrepancy.validate import validation
-from fmuid.errors import DataError
+from fmuid.errors import DataError, SpecError
 from fmuid.estimation.per_experiment import expand, for_experiment
 from fmuid.estimation.validation import STATES_METHOD
+from fmuid.experiment_design.space import check_design, space_from_json
+from fmuid.model.fmu import FmuModel
 from fmuid.stages import make_problem
 
 SIGMA = 0.01
@@ -189,3 +191,20 @@ def test_profiles_give_each_initial_state_its_interval(two_tanks_fmu, data):
 def test_spec_without_per_experiment_is_unchanged(two_tanks_fmu: Path, data):
     problem = make_problem(two_tanks_fmu, data, study(per_experiment=[]))
     assert problem.names == ("K", "tau1", "tau2", "h1_0", "h2_0")
+
+
+def test_a_design_refuses_per_experiment_parameters(two_tanks_fmu):
+    space = space_from_json(
+        json.dumps(
+            {
+                "input": "u",
+                "families": {"step": {"amplitude": [0.5, 2.0], "time": [0.0, 1.0]}},
+                "rates_hz": [5],
+                "outputs": {"h2": {"sigma": SIGMA}},
+                "duration": 8,
+            }
+        ),
+        "space.json",
+    )
+    with pytest.raises(SpecError, match="per_experiment: 'h1_0' takes one value per experiment"):
+        check_design(space, study(), FmuModel(two_tanks_fmu))
