@@ -87,7 +87,7 @@ class Hypothesis:
             }
         )
         model = model_of_file(path)
-        base = FmuPredictor(model, tspec.fixed, [space.input])
+        base = FmuPredictor(model, tspec.fixed, [space.input], per_experiment=spec.per_experiment)
         predictor = AugmentedPredictor(base, self.effects) if self.effects else base
         exp = trial_experiment(trial, space.input, values)
         return Problem(path, [exp], tspec, predictor=predictor, model=model)
