@@ -87,6 +87,7 @@ def test_fit_and_profile_write_contract_json(msd_fmu, tmp_path, capsys):
     assert all(p["status"] == "identifiable" for p in result["parameters"].values())
 
 
+@pytest.mark.slow
 def test_diagnose_writes_the_verdict_and_a_report(msd_fmu, tmp_path, capsys):
     data = msd_csv(tmp_path / "step.csv", seed=3)
     spec = write(tmp_path / "spec.json", json.dumps(SPEC))
