@@ -12,6 +12,8 @@ The stages are imported on first use, so that ``import fmuid`` (and ``fmuid --he
 from __future__ import annotations
 
 import importlib
+import sys
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
@@ -45,9 +47,20 @@ if TYPE_CHECKING:
     from fmuid.stages import fit, profile, simulate
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
-        raise AttributeError(f"module 'fmuid' has no attribute {name!r}")
-    value = getattr(importlib.import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
+def lazy_names(package: str, table: dict[str, str]) -> Callable[[str], Any]:
+    """Return a module ``__getattr__`` that imports each name of ``table`` on its first use.
+
+    ``table`` maps a name of the module ``package`` to the module that defines it.
+    """
+
+    def __getattr__(name: str) -> Any:
+        if name not in table:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(table[name]), name)
+        setattr(sys.modules[package], name, value)
+        return value
+
+    return __getattr__
+
+
+__getattr__ = lazy_names(__name__, _LAZY)

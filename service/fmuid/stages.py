@@ -14,7 +14,7 @@ from fmuid.data import Experiment, Spec
 from fmuid.data.checks import check_test_data
 from fmuid.errors import DataError, FmuError, SpecError
 from fmuid.estimation.predictor import merged_inputs
-from fmuid.estimation.validation import held_out_rms
+from fmuid.estimation.validation import validate
 from fmuid.model.base import as_model
 from fmuid.model.builtin import resolve_fmu
 from fmuid.model.fmu import USABLE, FmuModel
@@ -318,7 +318,4 @@ def _validated(problem: Problem, fit: FitResult, test_data: Sequence[Experiment]
     """Return ``fit`` with the held-out error of its estimates on ``test_data``."""
     if not test_data:
         return fit
-    entries = held_out_rms(
-        problem.predictor, fit.estimates, test_data, problem.outputs, problem.spec.settle
-    )
-    return replace(fit, validation=tuple(entries))
+    return replace(fit, validation=tuple(validate(problem, fit.estimates, test_data)))

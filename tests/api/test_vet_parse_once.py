@@ -9,7 +9,7 @@ import pytest
 from fmuid.data import InputLimits
 from fmuid.errors import SpecError
 from fmuid.intake.vet import VetTask, _check_design, check_json_shape, vet
-from fmuid.model.fmu import FmuModel
+from fmuid.model.world import registry
 
 SPEC = {
     "parameters": {"k": {"start": 4.0, "lower": 0.1, "upper": 20.0}},
@@ -27,16 +27,16 @@ def _task(tmp_path, msd_file, step_csv, fmu_name):
 
 
 def test_an_upload_is_parsed_once(tmp_path, msd_file, step_csv):
-    before = FmuModel.parses
+    before = registry().parses
     answer = vet(_task(tmp_path, msd_file, step_csv, "mine.fmu"))
     assert answer == {"ok": True, "model_name": "msd"}
-    assert FmuModel.parses - before == 1
+    assert registry().parses - before == 1
 
 
 def test_a_built_in_model_is_parsed_once(tmp_path, msd_file, step_csv):
-    before = FmuModel.parses
+    before = registry().parses
     assert vet(_task(tmp_path, msd_file, step_csv, None))["ok"]
-    assert FmuModel.parses - before == 1
+    assert registry().parses - before == 1
 
 
 @pytest.mark.parametrize(

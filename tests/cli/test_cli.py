@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from tests.model.spy import FmuSpy
 
 from fmuid.cli import main
 
@@ -86,26 +87,29 @@ def test_fit_and_profile_write_contract_json(msd_fmu, tmp_path, capsys):
     assert all(p["status"] == "identifiable" for p in result["parameters"].values())
 
 
+@pytest.mark.slow
 def test_diagnose_writes_the_verdict_and_a_report(msd_fmu, tmp_path, capsys):
     data = msd_csv(tmp_path / "step.csv", seed=3)
     spec = write(tmp_path / "spec.json", json.dumps(SPEC))
     out = tmp_path / "diagnosis.json"
-    code, stdout, err = run(
-        [
-            "diagnose",
-            "--fmu",
-            msd_fmu,
-            "--data",
-            data,
-            "--spec",
-            spec,
-            "--out",
-            out,
-            "--report",
-            tmp_path / "report",
-        ],
-        capsys,
-    )
+    with FmuSpy(msd_fmu) as spy:  # this process reads, opens and parses the FMU once
+        code, stdout, err = run(
+            [
+                "diagnose",
+                "--fmu",
+                msd_fmu,
+                "--data",
+                data,
+                "--spec",
+                spec,
+                "--out",
+                out,
+                "--report",
+                tmp_path / "report",
+            ],
+            capsys,
+        )
+    assert spy.seen() == (1, 1, 1)
     assert code == 0, err
     result = json.loads(out.read_text())
     assert result["mismatch"] is False

@@ -243,3 +243,26 @@ def test_load_spec(tmp_path):
     path.write_text(json.dumps(with_changes(seed=-3)))
     with pytest.raises(SpecError, match=r"^study\.json: seed: "):
         load_spec(path)
+
+
+def test_per_experiment_names_free_parameters():
+    free = {"x1_0": {"start": 0.0, "lower": -1.0, "upper": 1.0}, **CONTRACT_EXAMPLE["parameters"]}
+    spec = spec_from_json(json.dumps(with_changes(parameters=free, per_experiment=["x1_0"])))
+    assert spec.per_experiment == ["x1_0"]
+    assert spec_from_json(json.dumps(CONTRACT_EXAMPLE)).per_experiment == []
+    cases = [
+        (["x1_0", "x1_0"], {}, "spec.json: per_experiment[1]: 'x1_0' is listed twice"),
+        (["h2"], {}, "spec.json: per_experiment[0]: 'h2' is not in parameters: only a free"),
+        (["u_tc"], {}, "spec.json: per_experiment[0]: 'u_tc' is fixed: only a free parameter"),
+        (
+            ["x1_0"],
+            {"x1_0@run.csv": {"start": 0.0, "lower": -1.0, "upper": 1.0}},
+            "'x1_0@run.csv' is a parameter of its own, but would also name the value of 'x1_0' "
+            "in experiment 'run.csv'",
+        ),
+    ]
+    for names, extra, message in cases:
+        assert message in spec_error(
+            with_changes(parameters={**free, **extra}, per_experiment=names)
+        )
+    assert "per_experiment[0]" in spec_error(with_changes(per_experiment=[3]))

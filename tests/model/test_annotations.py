@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import ast
-import collections
 import json
 import logging
-import shutil
 import zipfile
 from pathlib import Path
 
@@ -66,48 +64,3 @@ def test_generic_packages_name_no_variable_of_the_tractor_model() -> None:
                 if isinstance(node, ast.Constant) and node.value in names:
                     found.append(f"{path.name}:{node.lineno} {node.value!r}")
     assert found == []
-
-
-def test_a_model_reads_its_file_once_and_keeps_the_annotation(
-    tractor_fmu: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """One disk read per parse, no zip opened on the file, one ElementTree parse by fmuid.
-
-    fmpy builds its model description from the same bytes in memory; the annotation is read
-    from the model afterwards, with the file gone.
-    """
-    import builtins
-    import io
-    import xml.etree.ElementTree as ET
-
-    from fmuid.model.fmu import FmuModel
-
-    fmu = Path(shutil.copy(tractor_fmu, tmp_path / "copy.fmu"))
-    counts = collections.Counter()
-    real_open, real_zip, real_parse = io.open, zipfile.ZipFile, ET.fromstring
-
-    def counting_open(file, *args, **kwargs):
-        counts["disk"] += str(file) == str(fmu)
-        return real_open(file, *args, **kwargs)
-
-    class CountingZip(real_zip):
-        def __init__(self, file, *args, **kwargs):
-            counts["zip on disk"] += not hasattr(file, "read")
-            super().__init__(file, *args, **kwargs)
-
-    def counting_parse(text, *args, **kwargs):
-        counts["xml"] += 1
-        return real_parse(text, *args, **kwargs)
-
-    monkeypatch.setattr(io, "open", counting_open)
-    monkeypatch.setattr(builtins, "open", counting_open)
-    monkeypatch.setattr(zipfile, "ZipFile", CountingZip)
-    monkeypatch.setattr(ET, "fromstring", counting_parse)
-    model = FmuModel(fmu)
-    assert (counts["disk"], counts["zip on disk"], counts["xml"]) == (1, 0, 1)
-    fmu.unlink()
-    assert planar_paths(model) == (
-        PlanarPath("tractor CG", "x_tc", "y_tc"),
-        PlanarPath("implement CG", "x_ic", "y_ic"),
-    )
-    assert (counts["disk"], counts["zip on disk"], counts["xml"]) == (1, 0, 1)

@@ -18,6 +18,7 @@ from fmuid.engine.cluster import PickledTask, execute_anywhere
 from fmuid.estimation.optimize import fit_problem
 from fmuid.jobs.store import Dataset, JobStore
 from fmuid.model.fmu import FmuModel
+from fmuid.model.world import FmuRegistry, open_registry, registry
 from fmuid.profiling.branch import BranchTask
 from fmuid.profiling.engine import thresholds
 from fmuid.profiling.walk import WalkOptions
@@ -90,10 +91,10 @@ def test_a_profile_job_parses_the_fmu_once_per_process(msd_fmu, tmp_path):
 
 def test_a_study_parses_the_fmu_once_in_process(msd_fmu):
     data = msd_step_data(**TRUTH, sigma=0.3, seed=5)
-    before = FmuModel.parses
-    problem = make_problem(msd_fmu, [data], spec(TRUTH, 0.3, interface="co_simulation"))
-    result = fmuid.profile(msd_fmu, [data], problem.spec, problem=problem, workers=1)
-    assert FmuModel.parses - before == 1
+    with open_registry() as world:  # as a process of its own: nothing parsed yet
+        problem = make_problem(msd_fmu, [data], spec(TRUTH, 0.3, interface="co_simulation"))
+        result = fmuid.profile(msd_fmu, [data], problem.spec, problem=problem, workers=1)
+        assert world.parses == 1
     assert result.fit.fmu_sha256 == problem.model.sha256
     assert problem.predictor.model is problem.model
 
@@ -112,11 +113,11 @@ def test_a_worker_without_the_file_parses_a_copy_of_the_bytes(msd_fmu, tmp_path,
     here = task.execute(lambda n: None)
     blob = moved.read_bytes()
     moved.unlink()
-    monkeypatch.setattr("fmuid.model.fmu._LOADED", {})  # a worker that has parsed nothing yet
+    monkeypatch.setattr("fmuid.model.world._current", FmuRegistry())  # a worker that parsed nothing
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    before = FmuModel.parses
+    before = registry().parses
     there, _ = execute_anywhere(sent, problem.model.sha256, blob)
-    assert FmuModel.parses - before == 1
+    assert registry().parses - before == 1
     assert (tmp_path / "fmuid-fmus" / problem.model.sha256 / "moved.fmu").read_bytes() == blob
     assert [p.chi2 for p in there.points] == [p.chi2 for p in here.points]
     assert there.points[-1].chi2 - fit.chi2 > thr
@@ -126,10 +127,10 @@ def test_stages_hand_on_a_parsed_model(msd_fmu):
     """``fmuid.simulate`` and ``make_problem`` take the model as it is: no parse."""
     model = FmuModel(msd_fmu)
     data = msd_step_data(**TRUTH, sigma=0.0, seed=0)
-    before = FmuModel.parses
+    before = registry().parses
     run = fmuid.simulate(model, data, {"k": 4.4})
     problem = make_problem(model, [data], spec(TRUTH, 0.3))
-    assert FmuModel.parses == before
+    assert registry().parses == before
     assert problem.model is model and run.model is model
     np.testing.assert_allclose(run.outputs["x"], data.columns["x"], atol=1e-8)  # scipy's
     np.testing.assert_array_equal(run.inputs["f"], data.columns["f"])

@@ -23,6 +23,7 @@ from fmuid.intake.pool import VettingPool
 from fmuid.jobs.health import StoreHealth
 from fmuid.jobs.store import JobStore
 from fmuid.jobs.worker import Supervisor
+from fmuid.model.world import open_registry
 from fmuid.settings import Settings
 
 logger = logging.getLogger(__name__)
@@ -61,11 +62,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        supervisor.start()
-        logger.info("fmuid service: data in %s, %d worker(s)", settings.data_dir, settings.workers)
-        yield
-        vetting.close()
-        supervisor.stop()
+        with open_registry():
+            supervisor.start()
+            logger.info(
+                "fmuid service: data in %s, %d worker(s)", settings.data_dir, settings.workers
+            )
+            yield
+            vetting.close()
+            supervisor.stop()
 
     app = FastAPI(
         title="fmuid",

@@ -27,6 +27,7 @@ from fmuid.console import (
     profile_table,
 )
 from fmuid.errors import BuildError, DataError, FitError, FmuError, SpecError
+from fmuid.model.world import open_registry
 
 log = logging.getLogger("fmuid")
 
@@ -329,7 +330,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         exit_on_interrupt()  # the console script only: a caller of main() keeps its own handler
     func: Callable[[argparse.Namespace], int] = args.func
     try:
-        return func(args)
+        with open_registry():
+            return func(args)
     except (FitError, BuildError, DataError, SpecError, FmuError) as exc:
         sys.stderr.write(f"fmuid {args.command}: error: {exc}\n")
         return next(code for cause, code in EXIT_BY_CAUSE if isinstance(exc, cause))

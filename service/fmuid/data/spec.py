@@ -182,6 +182,11 @@ class Spec(BaseModel):
         Settle-in window [s]: every experiment's first ``settle`` seconds are simulated but
         left out of the likelihood and of the validation error (a real plant starts from an
         unknown state).
+    per_experiment
+        Free parameters that take one value per experiment (initial states an FMU exposes as
+        parameters, e.g. ``x1_0``): each is fitted as ``<name>@<experiment file>`` with the
+        bounds, scale and start of its entry in ``parameters``, and estimated on each test
+        record as well (:mod:`fmuid.estimation.initial`).
 
     """
 
@@ -197,6 +202,7 @@ class Spec(BaseModel):
     physics: dict[str, PhysicsSpec] = {}
     interface: Literal["auto", "co_simulation", "model_exchange"] = "auto"
     settle: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.0
+    per_experiment: list[str] = []
 
     _source: str = PrivateAttr(default="spec")
 
@@ -229,4 +235,26 @@ class Spec(BaseModel):
         for index, name in enumerate(self.inputs):
             if name in self.inputs[:index] or name in self.outputs:
                 raise _field_error(f"inputs.{index}", f"'{name}' is listed twice or is an output")
+        self._check_per_experiment(seen)
         return self
+
+    def _check_per_experiment(self, names: set[str]) -> None:
+        """Each ``per_experiment`` entry: a free parameter, listed once, its expansion unused."""
+        for index, name in enumerate(self.per_experiment):
+            field = f"per_experiment.{index}"
+            if name in self.per_experiment[:index]:
+                raise _field_error(field, f"'{name}' is listed twice")
+            if name not in self.parameters:
+                where = "fixed" if name in self.fixed else "not in parameters"
+                raise _field_error(
+                    field,
+                    f"'{name}' is {where}: only a free parameter can take one value per "
+                    "experiment (give it start, lower and upper in parameters)",
+                )
+            taken = sorted(n for n in names if n.startswith(f"{name}@"))
+            if taken:
+                raise _field_error(
+                    field,
+                    f"'{taken[0]}' is a parameter of its own, but would also name the value of "
+                    f"'{name}' in experiment '{taken[0][len(name) + 1 :]}'",
+                )

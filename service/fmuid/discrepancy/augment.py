@@ -144,7 +144,7 @@ class AugmentedPredictor:
             self._fine(experiment) if lags else (experiment.time, np.arange(len(experiment.time)))
         )
         y = get_simulator(self.base.model).simulate(
-            {**self.base.fixed, **fmu_params},
+            self.base.fmu_values(fmu_params, experiment),
             input_time,
             inputs,
             out_time,

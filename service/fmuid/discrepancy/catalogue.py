@@ -338,7 +338,7 @@ def undriven_sizes(problem: Problem, values: Mapping[str, float]) -> dict[str, f
     exp, mask, data = problem.experiments[0], problem.masks[0], problem.data[0]
     base = problem.predictor.predict(values, exp, problem.outputs)
     input_time, inputs = predictor.inputs_of(exp)
-    params = {**predictor.fixed, **values}
+    params = predictor.fmu_values(values, exp)
     out = {}
     for name in undriven:
         pushed = get_simulator(problem.model).simulate(

@@ -10,6 +10,7 @@ from scipy import stats
 
 from fmuid.discrepancy import residual_tests as rt
 from fmuid.estimation.optimize import FitOptions, refine
+from fmuid.estimation.per_experiment import split
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
@@ -92,11 +93,13 @@ def experiments_disagree(problem: Problem, fit: FitResult, max_nfev: int) -> rt.
     """Likelihood-ratio test that every experiment shares the parameters.
 
     Each experiment is fitted alone, warm-started from the joint fit; the joint chi2 minus the
-    sum of the separate ones is chi2 with (experiments - 1) x parameters df (conservative when
-    a single experiment leaves parameters unidentifiable). A concealed effect often shows here:
+    sum of the separate ones is chi2 with (experiments - 1) x shared parameters df (those not
+    already one per experiment; conservative when a single experiment leaves parameters
+    unidentifiable). A concealed effect often shows here:
     each experiment hides it with other parameter values.
     """
-    if len(problem.experiments) < 2:
+    shared = [n for n in problem.names if split(n, problem.spec.per_experiment) is None]
+    if len(problem.experiments) < 2 or not shared:
         return None
     separate = 0.0
     z0 = fit.z_estimate()
@@ -114,7 +117,7 @@ def experiments_disagree(problem: Problem, fit: FitResult, max_nfev: int) -> rt.
         _, chi2, _ = refine(one, z0, options=FitOptions(ftol=1e-8, max_nfev=max_nfev))
         separate += chi2
     stat = max(fit.chi2 - separate, 0.0)
-    df = (len(problem.experiments) - 1) * problem.n_free
+    df = (len(problem.experiments) - 1) * len(shared)
     p = float(stats.chi2.sf(stat, df))
     return rt.TestResult("experiments_disagree", None, None, p, stat, df)
 

@@ -15,7 +15,7 @@ from fmuid.data import Experiment
 from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.engine.count import counted
 from fmuid.estimation.problem import Problem
-from fmuid.estimation.validation import ValidationEntry, held_out_rms
+from fmuid.estimation.validation import ValidationEntry, validate
 
 
 def validation(
@@ -30,12 +30,13 @@ def validation(
         return []
     runs = []
     for problem, values in models:
-        found = held_out_rms(
-            problem.predictor, values, experiments, problem.outputs, settle=problem.spec.settle
-        )
+        found = validate(problem, values, experiments)
         counted(len(experiments))
         runs.append({(e.experiment, e.output): e for e in found})
-    return [entry.with_steps([run[key].rms_base for run in runs]) for key, entry in runs[0].items()]
+    return [
+        entry.with_steps([run[key].rms_base for run in runs], runs[-1][key].initial_states)
+        for key, entry in runs[0].items()
+    ]
 
 
 def coupling_error(problem: Problem, values: Mapping[str, float]) -> float | None:

@@ -92,7 +92,7 @@ class DaskEngine(Engine):
     def __init__(self, client: Any, model: FmuModel) -> None:
         self._client = client
         self._model = model
-        self._blob = model.path.read_bytes()
+        self._blob = model.data
         self._unreliable = get_simulator(model).reset_reliable is False
 
     def run(

@@ -23,7 +23,7 @@ from fmuid.engine.guard import die_with_pool_owner
 from fmuid.engine.pool import local_pool
 from fmuid.engine.task import Engine, OnDone, OnEvent, Task
 from fmuid.model.fmu import FmuFile, FmuModel, load_model
-from fmuid.model.registry import get_simulator, mark_reset_unreliable
+from fmuid.model.registry import close_at_exit, get_simulator, mark_reset_unreliable
 
 log = logging.getLogger(__name__)
 
@@ -62,9 +62,13 @@ class SerialEngine(Engine):
 
 
 def _init_worker(events: Any, owner: int, fmu: FmuFile, unreliable: bool) -> None:
-    """Set up a pool worker: die with the owner, parse the FMU once, know its reset verdict."""
+    """Set up a pool worker: die with the owner, parse the FMU once, know its reset verdict.
+
+    The worker's FMU registry is closed when the worker ends (its simulators' files deleted).
+    """
     global _events
     die_with_pool_owner(owner)
+    close_at_exit()
     model = load_model(fmu)
     if unreliable:
         mark_reset_unreliable(model)

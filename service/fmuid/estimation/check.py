@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from fmuid.data import Experiment, Spec, check_against_model
-from fmuid.errors import SpecError
+from fmuid.errors import DataError, SpecError
 from fmuid.model.fmu import FmuModel
 
 
@@ -27,8 +27,9 @@ def check_study(model: FmuModel, spec: Spec, experiments: Sequence[Experiment]) 
     ------
     SpecError, DataError
         Naming the field, the file or the variable at fault: an interface the FMU lacks, a
-        name it does not have, data that do not fit, or a variable whose type does not fit the
-        role the spec gives it (:meth:`FmuModel.usage_problems`).
+        name it does not have, data that do not fit, a variable whose type does not fit the
+        role the spec gives it (:meth:`FmuModel.usage_problems`), or two experiments of one
+        name when parameters take one value per experiment (``name@<experiment>``).
 
     """
     wrong_interface = model.interface_problem(spec.interface)
@@ -40,4 +41,12 @@ def check_study(model: FmuModel, spec: Spec, experiments: Sequence[Experiment]) 
     problems = model.usage_problems(free, spec.fixed, spec.inputs, spec.outputs)
     if problems:
         raise SpecError("\n".join(f"{spec.source}: {problem}" for problem in problems))
+    names = [experiment.name for experiment in experiments]
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if spec.per_experiment and repeated:
+        raise DataError(
+            f"{', '.join(repeated)}: two experiments have this file name, but "
+            f"{', '.join(spec.per_experiment)} (per_experiment) take one value per experiment, "
+            "named after its file; rename one of the files"
+        )
     return model

@@ -9,6 +9,7 @@ from typing import Protocol
 import numpy as np
 
 from fmuid.data import Experiment
+from fmuid.estimation.per_experiment import for_experiment
 from fmuid.model.base import as_model
 from fmuid.model.fmu import FmuModel
 from fmuid.model.registry import get_simulator
@@ -67,6 +68,10 @@ class FmuPredictor:
     interface
         ``"auto"``, ``"co_simulation"`` or ``"model_exchange"`` (the spec's ``interface``);
         None: the model's.
+    per_experiment
+        Parameters that take one value per experiment (the spec's ``per_experiment``): an
+        experiment's run takes ``name@<experiment>`` as ``name``
+        (:mod:`fmuid.estimation.per_experiment`).
 
     """
 
@@ -76,11 +81,13 @@ class FmuPredictor:
         fixed: Mapping[str, float | str],
         inputs: Sequence[str],
         interface: str | None = None,
+        per_experiment: Sequence[str] = (),
     ):
         self.model = as_model(fmu, interface)
         self.fmu_path = str(self.model.path)
         self.fixed = dict(fixed)
         self.inputs = tuple(inputs)
+        self.per_experiment = tuple(per_experiment)
         self._inputs_cache: dict[int, tuple[Experiment, np.ndarray, dict[str, np.ndarray]]] = {}
 
     def __getstate__(self) -> dict[str, object]:
@@ -99,12 +106,24 @@ class FmuPredictor:
             self._inputs_cache[id(experiment)] = cached
         return cached[1], cached[2]
 
+    def fmu_values(
+        self, params: Mapping[str, float], experiment: Experiment
+    ) -> dict[str, float | str]:
+        """Return the FMU parameter values of ``experiment``'s run: the fixed ones, then ``params``.
+
+        Each per-experiment parameter takes the experiment's own value, under the FMU's name.
+        """
+        return {**self.fixed, **for_experiment(params, self.per_experiment, experiment.name)}
+
     def predict(
         self, params: Mapping[str, float], experiment: Experiment, outputs: Sequence[str]
     ) -> np.ndarray:
         """Simulate the FMU and return ``outputs`` at every row of the experiment."""
         input_time, input_values = self.inputs_of(experiment)
-        values = {**self.fixed, **params}
         return get_simulator(self.model).simulate(
-            values, input_time, input_values, experiment.time, list(outputs)
+            self.fmu_values(params, experiment),
+            input_time,
+            input_values,
+            experiment.time,
+            list(outputs),
         )

@@ -11,10 +11,11 @@ from fmuid.data import Experiment, ParameterSpec, Spec, used_inputs
 from fmuid.data.checks import settled_rows
 from fmuid.engine.count import counted
 from fmuid.errors import DataError, FmuError
+from fmuid.estimation.per_experiment import expand, split
 from fmuid.estimation.predictor import FmuPredictor, Predictor
 from fmuid.estimation.sigma import SPLINE_METHOD, spline_residual_sigma
 from fmuid.estimation.space import ParameterSpace
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import FmuModel, model_of_file
 
 
 class Problem:
@@ -23,7 +24,9 @@ class Problem:
     Parameters are fitted in the coordinates ``z`` of its :class:`ParameterSpace` (``space``):
     ``log10(value)`` for log-scaled parameters (the default when the lower bound is positive)
     and the value itself otherwise. Each simulation counts in the counts open
-    (:func:`fmuid.engine.count.counting`).
+    (:func:`fmuid.engine.count.counting`). A parameter of ``spec.per_experiment`` is fitted as
+    one parameter per experiment, ``name@<experiment>`` (:mod:`fmuid.estimation.per_experiment`),
+    each with the bounds, scale and start of ``name``.
 
     Parameters
     ----------
@@ -61,11 +64,15 @@ class Problem:
         self.model = (
             model.with_interface(spec.interface)
             if model is not None
-            else FmuModel(self.fmu_path, spec.interface)
+            else model_of_file(self.fmu_path, spec.interface)
         )
         self.experiments = list(experiments)
         self.spec = spec
-        params = dict(parameters if parameters is not None else spec.parameters)
+        params = expand(
+            parameters if parameters is not None else spec.parameters,
+            spec.per_experiment,
+            [exp.name for exp in self.experiments],
+        )
         self.parameter_specs = params
         self.space = ParameterSpace.from_specs(params)
         self.names = self.space.names
@@ -82,7 +89,9 @@ class Problem:
             }
         )
         self.inputs = inputs
-        self.predictor: Predictor = predictor or FmuPredictor(self.model, spec.fixed, inputs)
+        self.predictor: Predictor = predictor or FmuPredictor(
+            self.model, spec.fixed, inputs, per_experiment=spec.per_experiment
+        )
         self.masks = [
             [
                 exp.output_mask(o) & kept if o in exp.columns else np.zeros(exp.n_rows, bool)
@@ -140,11 +149,19 @@ class Problem:
         return self.space.from_z(z)
 
     def units(self) -> dict[str, str]:
-        """Return the unit of each free and fixed parameter, input and output the FMU declares."""
+        """Return the unit of each free and fixed parameter, input and output the FMU declares.
+
+        A per-experiment parameter ``name@<experiment>`` has the unit of ``name``.
+        """
         model = self.model
         declared = {**model.parameters, **model.inputs, **model.outputs}
         names = [*self.names, *self.spec.fixed, *self.inputs, *self.outputs]
-        return {n: declared[n].unit or "" for n in names if n in declared and declared[n].unit}
+        fmu_name = {n: (split(n, self.spec.per_experiment) or (n,))[0] for n in names}
+        return {
+            n: declared[f].unit or ""
+            for n, f in fmu_name.items()
+            if f in declared and declared[f].unit
+        }
 
     def representative_sigma(self) -> dict[str, float]:
         """Return one sigma per output: the median over its fitted samples."""

@@ -143,6 +143,11 @@ class ValidationOut(Block):
     rms_base: float
     rms_final: float | None = omitted_if_none("Of the final augmented model (diagnose only).")
     rms_by_step: list[float] = omitted_if_empty([], "After each step, the base first.")
+    initial_states: dict[str, float] = omitted_if_empty(
+        {}, "The record's per-experiment parameters, estimated on it (``Spec.per_experiment``)."
+    )
+    initial_states_final: dict[str, float] = omitted_if_empty({}, "The same, final model.")
+    initial_states_method: str | None = omitted_if_none("How the initial states were obtained.")
 
 
 class ProvenanceOut(Block):

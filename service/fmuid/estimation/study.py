@@ -9,7 +9,7 @@ from fmuid.data import Experiment, Spec
 from fmuid.estimation.check import check_study
 from fmuid.estimation.problem import Problem
 from fmuid.model.builtin import resolve_fmu
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import FmuModel, model_of_file
 from fmuid.model.registry import get_simulator
 
 
@@ -27,7 +27,7 @@ def make_problem(
     ``fmu`` is a parsed FMU (:class:`FmuModel`, handed on as it is), an FMU file or the name
     of a built-in model (e.g. ``"msd"``).
     """
-    model = fmu if isinstance(fmu, FmuModel) else FmuModel(resolve_fmu(fmu))
+    model = fmu if isinstance(fmu, FmuModel) else model_of_file(resolve_fmu(fmu))
     model = check_study(model, spec, experiments)
     get_simulator(model)
     return Problem(model.path, experiments, spec, model=model)

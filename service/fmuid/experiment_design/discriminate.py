@@ -9,7 +9,6 @@ misfit, the best few tests are confirmed with full fits.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -36,7 +35,7 @@ from fmuid.experiment_design.signals import (
 )
 from fmuid.experiment_design.space import Space, space_from_json
 from fmuid.model.builtin import resolve_fmu
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import model_of_file
 from fmuid.progress import Progress, ProgressCallback
 
 CONFIRM = 3
@@ -88,16 +87,11 @@ class Hypothesis:
                 "fixed": {**spec.fixed, **trial.fixed, **self.fixed},
             }
         )
-        model = _model(path)
-        base = FmuPredictor(model, tspec.fixed, [space.input])
+        model = model_of_file(path)
+        base = FmuPredictor(model, tspec.fixed, [space.input], per_experiment=spec.per_experiment)
         predictor = AugmentedPredictor(base, self.effects) if self.effects else base
         exp = trial_experiment(trial, space.input, values)
         return Problem(path, [exp], tspec, predictor=predictor, model=model)
-
-
-@functools.lru_cache(maxsize=8)
-def _model(path: Path) -> FmuModel:
-    return FmuModel(path)
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from fmuid.experiment_design.signals import Trial, sample_trials
 from fmuid.experiment_design.space import Space, check_design
 from fmuid.experiment_design.verify import Draw, DrawTask, combine
 from fmuid.model.builtin import resolve_fmu
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import FmuModel, model_of_file
 from fmuid.profiling.engine import thresholds
 from fmuid.progress import Progress, ProgressCallback, default_progress
 
@@ -131,7 +131,7 @@ def design(
     t0 = time.perf_counter()
     started = provenance.now()
     progress = default_progress(progress)
-    model = FmuModel(resolve_fmu(fmu))
+    model = model_of_file(resolve_fmu(fmu))
     check_design(space, spec, model)
     n_verify = space.verify_designs if verify_designs is None else verify_designs
     store = Checkpoint.for_study(checkpoint, model, spec, space, n_verify) if checkpoint else None

@@ -325,5 +325,10 @@ def check_design(space: Space, spec: Any, model: Any) -> None:
     problems += model.usage_problems(
         list(spec.parameters), spec.fixed, [space.input], list(space.outputs)
     )
+    problems += [
+        f"spec: per_experiment: {name!r} takes one value per experiment, which a design does "
+        "not support; move it to fixed (the state a designed test starts from)"
+        for name in spec.per_experiment
+    ]
     if problems:
         raise SpecError("\n".join(problems))

@@ -95,6 +95,12 @@ def write_petab(
     out.mkdir(parents=True, exist_ok=True)
     if spec.physics:
         logger.warning("PEtab has no switchable physics: spec.physics is not exported")
+    if spec.per_experiment:
+        logger.warning(
+            "spec.per_experiment is not exported: %s become one parameter shared by every "
+            "experiment",
+            ", ".join(spec.per_experiment),
+        )
     ids = _experiment_ids([e.name for e in experiments])
     model_file = Path(fmu).name
     shutil.copyfile(fmu, out / model_file)

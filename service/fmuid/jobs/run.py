@@ -18,7 +18,6 @@ import json
 import logging
 import math
 import os
-import re
 import shutil
 import signal
 import sys
@@ -26,18 +25,19 @@ import tempfile
 import threading
 import time
 import traceback
-import zipfile
 from collections.abc import Iterator
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
-from fmuid.errors import FmuidError
+from fmuid.errors import FmuError, FmuidError
 from fmuid.intake.inputs import load_job_inputs
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.health import free_space_problem
 from fmuid.jobs.kinds import RunContext, runner
 from fmuid.jobs.reaper import end_tree_on_parent_death, kill_tree
 from fmuid.jobs.store import Job, JobStore, StoreError
+from fmuid.model.fmu import model_of_file
+from fmuid.model.world import open_registry
 from fmuid.processes import become_subreaper, kill_group, limit_memory
 from fmuid.progress import Progress
 
@@ -46,7 +46,6 @@ logger = logging.getLogger(__name__)
 PROGRESS_INTERVAL_S = 0.5
 ALARM_GRACE_S = 10
 """The kernel's ``SIGALRM`` ends the job this long after its time limit if nothing else did."""
-_FMI_VERSION = re.compile(rb'fmiVersion\s*=\s*"([^"]{1,10})"')
 
 
 def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
@@ -174,16 +173,16 @@ def _removed_after(folder: Path) -> Iterator[None]:
 
 
 def _log_fmi_version(fmu: Path) -> None:
-    """Write the FMU's FMI version to stderr (the job log), for :mod:`fmuid.jobs.crash`."""
+    """Write the FMU's FMI version to stderr (the job log), for :mod:`fmuid.jobs.crash`.
+
+    The FMU is parsed here, once for the job: the stage finds this model by the file.
+    """
     try:
-        with zipfile.ZipFile(fmu) as archive, archive.open("modelDescription.xml") as xml:
-            head = xml.read(4096)
-    except (OSError, KeyError, zipfile.BadZipFile):
+        version = model_of_file(fmu).fmi_version
+    except FmuError:  # the stage says what is wrong with it
         return
-    found = _FMI_VERSION.search(head)
-    if found:
-        sys.stderr.write(f"{FMI_VERSION_LINE}{found[1].decode(errors='replace')}\n")
-        sys.stderr.flush()
+    sys.stderr.write(f"{FMI_VERSION_LINE}{version}\n")
+    sys.stderr.flush()
 
 
 def _read_log() -> str:
@@ -217,7 +216,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     enforce_time_limit(store, job.id, args.timeout_s)
     try:
-        return run_job(store, job, args.memory_mb, args.dask_scheduler, args.min_free_bytes)
+        with open_registry():
+            return run_job(store, job, args.memory_mb, args.dask_scheduler, args.min_free_bytes)
     except StoreError:
         logger.exception("job %s could not record its outcome", job.id)
         return STORE_FAILED_EXIT

@@ -23,7 +23,7 @@ import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from fmuid.model.fmu import FmuModel
@@ -40,14 +40,17 @@ class PlanarPath:
     y: str
 
 
-def fmuid_annotation_of(root: ET.Element | None) -> ET.Element | None:
-    """Return the ``<Model>`` element of the ``fmuid`` annotation under a parsed description."""
+def fmuid_annotation_of(root: Any) -> Any:
+    """Return the ``<Model>`` element of the ``fmuid`` annotation under a parsed description.
+
+    ``root`` is the root element (lxml's or the standard library's) or None; so is the result.
+    """
     if root is None:
         return None
     return root.find("VendorAnnotations/Tool[@name='fmuid']/Model")
 
 
-def fmuid_annotation(fmu: FmuModel | str | Path) -> ET.Element | None:
+def fmuid_annotation(fmu: FmuModel | str | Path) -> Any:
     """Return the ``<Model>`` element of the FMU's ``fmuid`` annotation, or None when it has none.
 
     A model gives the annotation it parsed; a path is read now (an unreadable

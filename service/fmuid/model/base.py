@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from fmuid.model.exchange import RTOL
-from fmuid.model.fmu import FmuModel
+from fmuid.model.fmu import FmuModel, model_of_file
 
 INPUT_STEP = 1e-3
 """Default longest sub-step [s] over which a co-simulation FMU without input derivatives holds
@@ -13,10 +13,13 @@ an input (the linear input's value at each sub-step's midpoint)."""
 
 
 def as_model(fmu: FmuModel | str | Path, interface: str | None = None) -> FmuModel:
-    """Return ``fmu`` driving ``interface`` (None: as it is), parsing it only if it is a path."""
+    """Return ``fmu`` driving ``interface`` (None: as it is).
+
+    A path gives this process's model of the file (:func:`~fmuid.model.fmu.model_of_file`).
+    """
     if isinstance(fmu, FmuModel):
         return fmu if interface is None else fmu.with_interface(interface)
-    return FmuModel(fmu, interface)
+    return model_of_file(fmu, interface)
 
 
 class SimulatorBase:

@@ -7,22 +7,19 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import io
 import logging
-import posixpath
-import xml.etree.ElementTree as ET
-import zipfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
+from typing import Any
 
-import fmpy
 from fmpy.model_description import ModelDescription
 
 from fmuid.errors import FmuError
 from fmuid.model.annotations import fmuid_annotation_of
+from fmuid.model.archive import open_archive, read_description
 from fmuid.model.variable import USABLE, Variable, from_fmpy
+from fmuid.model.world import registry
 
 logger = logging.getLogger(__name__)
 
@@ -56,63 +53,6 @@ _FIXED_HELP = {
 
 
 @dataclass(frozen=True)
-class _Archive:
-    """What one read of an FMU file gives: its bytes, entry names and parsed description."""
-
-    data: bytes
-    names: frozenset[str]
-    root: ET.Element | None
-    """The root of ``modelDescription.xml``, or None when the archive has none."""
-
-
-def _read_archive(path: Path) -> _Archive:
-    """Read the file once: its bytes, its entries (checked) and ``modelDescription.xml`` parsed.
-
-    The file is read from disk once and its zip directory opened once, in memory.
-    """
-    if not path.is_file():
-        raise FmuError(f"FMU {path} does not exist")
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise FmuError(f"FMU {path} cannot be read: {exc}") from exc
-    if not zipfile.is_zipfile(io.BytesIO(data)):
-        raise FmuError(f"{path} is not an FMU: it is not a zip archive")
-    try:
-        with zipfile.ZipFile(io.BytesIO(data)) as archive:
-            names = archive.namelist()
-            _check_names(path, names)
-            has_xml = "modelDescription.xml" in names
-            xml = archive.read("modelDescription.xml") if has_xml else None
-    except (zipfile.BadZipFile, OSError) as exc:
-        raise FmuError(f"{path} is not a readable zip archive: {exc}") from exc
-    root = None
-    if xml is not None:
-        try:
-            root = ET.fromstring(xml)
-        except ET.ParseError as exc:
-            raise FmuError(f"{path}: modelDescription.xml is not valid XML: {exc}") from exc
-    return _Archive(data, frozenset(names), root)
-
-
-def _check_names(path: Path, names: list[str]) -> None:
-    """Refuse entries that would escape the extraction directory."""
-    for name in names:
-        normalized = posixpath.normpath(name.replace("\\", "/"))
-        if name.startswith(("/", "\\")) or normalized == ".." or normalized.startswith("../"):
-            raise FmuError(f"{path}: archive entry {name!r} escapes the extraction directory")
-        if len(name) > 1 and name[1] == ":":
-            raise FmuError(f"{path}: archive entry {name!r} is an absolute Windows path")
-
-
-def _fmi_version(path: Path, root: ET.Element | None) -> str:
-    if root is None:
-        raise FmuError(f"{path}: the FMU has no modelDescription.xml")
-    version = root.get("fmiVersion", "unknown")
-    return "3.0" if version.startswith("3.") else version
-
-
-@dataclass(frozen=True)
 class FmuFile:
     """What a process hands another so that it parses the FMU once: file, checksum, interface.
 
@@ -123,9 +63,6 @@ class FmuFile:
     path: str
     sha256: str
     interface: str
-
-
-_LOADED: dict[tuple[str, str], FmuModel] = {}
 
 
 def load_model(file: FmuFile) -> FmuModel:
@@ -140,10 +77,31 @@ def load_model(file: FmuFile) -> FmuModel:
         If the file is missing, invalid, or no longer has the checksum ``file.sha256``.
 
     """
-    key = (file.sha256, file.interface)
-    if key not in _LOADED:
-        _LOADED[key] = FmuModel(file.path, file.interface, sha256=file.sha256)
-    return _LOADED[key]
+    return registry().model(
+        (file.sha256, file.interface),
+        lambda: FmuModel(file.path, file.interface, sha256=file.sha256),
+    )
+
+
+def model_of_file(path: str | Path, interface: str | None = None) -> FmuModel:
+    """Return this process's model of the file at ``path``, parsed again when the file changes.
+
+    For a caller that holds only the path (a script simulating in a loop, a stage given a
+    file); a change of the file's modification time or size makes it parse the file again.
+
+    Raises
+    ------
+    FmuError
+        If the file does not exist or is not a usable FMU (see :class:`FmuModel`).
+
+    """
+    try:
+        st = Path(path).stat()
+    except OSError as exc:
+        raise FmuError(f"FMU {path} does not exist") from exc
+    wanted = INTERFACES.get(interface, interface)
+    key = (str(Path(path).resolve()), st.st_mtime_ns, st.st_size, wanted)
+    return registry().file_model(key, lambda: FmuModel(path, interface))
 
 
 class FmuModel:
@@ -170,6 +128,9 @@ class FmuModel:
         The ``.fmu`` file.
     sha256
         SHA-256 hex digest of the file.
+    data
+        The file's bytes, as read and hashed (its zip, opened on them once, is unpacked for
+        each simulator by :meth:`extract`).
     model_name, fmi_version, guid, model_identifier
         From ``modelDescription.xml`` (``guid`` is the FMI 3.0 ``instantiationToken``).
     interface
@@ -191,34 +152,24 @@ class FmuModel:
 
     """
 
-    parses: ClassVar[int] = 0
-    """FMU files read and hashed (then parsed) in this process."""
-
     def __init__(
         self, path: str | Path, interface: str | None = None, *, sha256: str | None = None
     ) -> None:
         self.path = Path(path)
-        archive = _read_archive(self.path)
+        archive = open_archive(self.path)
         self.sha256 = hashlib.sha256(archive.data).hexdigest()
-        FmuModel.parses += 1
+        registry().count_parse()
         if sha256 is not None and sha256 != self.sha256:
             raise FmuError(
                 f"{self.path}: the FMU changed: its sha256 is {self.sha256[:12]}..., "
                 f"expected {sha256[:12]}..."
             )
         logger.debug("parsed %s (sha256 %s)", self.path, self.sha256[:12])
-        version = _fmi_version(self.path, archive.root)
-        if version not in BINARY_DIR:
-            raise FmuError(
-                f"{self.path}: FMI version {version} is not supported (only 2.0 and 3.0)"
-            )
-        try:  # fmpy reads the bytes in memory: the file is not opened again
-            description = fmpy.read_model_description(io.BytesIO(archive.data))
-        except Exception as exc:  # fmpy raises bare Exception, lxml and KeyError subclasses
-            raise FmuError(
-                f"{self.path}: cannot read modelDescription.xml (FMI {version}): {exc}"
-            ) from exc
-        self.annotation: ET.Element | None = fmuid_annotation_of(archive.root)
+        parsed = read_description(self.path, archive.xml)
+        description = parsed.fmpy
+        self.data = archive.data
+        self._zip = archive.zip
+        self.annotation: Any = fmuid_annotation_of(parsed.root)
         """The ``<Model>`` element of the FMU's ``fmuid`` vendor annotation, or None."""
         self.model_description: ModelDescription = description
         self.interfaces = tuple(
@@ -231,9 +182,9 @@ class FmuModel:
         )
         self.interface = _choose_interface(self.path, self.interfaces, interface)
         self.model_name: str = description.modelName
-        self.fmi_version: str = version
+        self.fmi_version: str = parsed.fmi_version
         self.guid: str = description.guid or description.instantiationToken or ""
-        self._archive = archive.names
+        self._archive = frozenset(archive.zip.namelist())
         self.model_identifier: str = self._identifier()
         self.parameters: dict[str, Variable] = {}
         self.inputs: dict[str, Variable] = {}
@@ -262,6 +213,10 @@ class FmuModel:
     def __reduce__(self) -> tuple[object, tuple[FmuFile]]:
         """Pickle as the :class:`FmuFile`: the receiving process parses it once."""
         return (load_model, (self.file,))
+
+    def extract(self, folder: str | Path) -> None:
+        """Unpack the FMU, as read and hashed, into ``folder`` (the zip is not opened again)."""
+        self._zip.extractall(folder)
 
     def with_interface(self, interface: str | None) -> FmuModel:
         """Return this model driving ``interface`` (as in the constructor), without re-parsing.

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from fmuid.model.builtin import resolve_fmu
-from fmuid.model.fmu import FmuModel, Variable
+from fmuid.model.fmu import Variable, model_of_file
 from fmuid.model.smoke import ModelHealth, model_health
 
 
@@ -108,7 +108,7 @@ def info(model: str | Path, health: bool = True) -> ModelInfo:
 
     """
     path = resolve_fmu(model)
-    fmu = FmuModel(path)
+    fmu = model_of_file(path)
     description = fmu.model_description
     declared = {v.name: v for v in description.modelVariables}
     interfaces = fmu.interfaces

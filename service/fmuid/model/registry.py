@@ -2,28 +2,29 @@
 
 An FMU whose reset was found unreliable is run by a :class:`~fmuid.model.host.HostedSimulator`
 from then on; a caller that holds only a file's path gets the file's parsed model, parsed again
-only when the file changes.
+only when the file changes. What these functions keep lives in this process's
+:class:`~fmuid.model.world.FmuRegistry`, opened and closed by the process's entry point.
 """
 
 from __future__ import annotations
 
-import os
-import threading
 from pathlib import Path
 
-from fmuid.errors import FmuError
 from fmuid.model.base import as_model
-from fmuid.model.fmu import INTERFACES, FmuModel
+from fmuid.model.fmu import FmuModel
 from fmuid.model.host import HostedSimulator
 from fmuid.model.simulator import Simulator
+from fmuid.model.world import FmuRegistry, close_at_exit, open_registry, registry
 
-FILE_MODELS = 16
-"""Models kept for callers of :func:`get_simulator` that hold only a path."""
-
-_CACHE: dict[tuple[tuple[str, str, str], int], Simulator | HostedSimulator] = {}
-_CACHE_PID = os.getpid()
-_UNRELIABLE: set[tuple[str, str, str]] = set()
-_BY_FILE: dict[tuple[str, int, int, str | None], FmuModel] = {}
+__all__ = [
+    "FmuRegistry",
+    "close_at_exit",
+    "fmu_summary",
+    "get_simulator",
+    "mark_reset_unreliable",
+    "open_registry",
+    "registry",
+]
 
 
 def mark_reset_unreliable(model: FmuModel) -> None:
@@ -31,7 +32,7 @@ def mark_reset_unreliable(model: FmuModel) -> None:
 
     The record holds in this process and in the worker processes it forks later.
     """
-    _UNRELIABLE.add(model.key)
+    registry().mark_reset_unreliable(model.key)
 
 
 def fmu_summary(fmu: FmuModel | str | Path, interface: str | None = None) -> dict[str, str]:
@@ -43,31 +44,6 @@ def fmu_summary(fmu: FmuModel | str | Path, interface: str | None = None) -> dic
         "input_handling": simulator.input_handling,
         "instances": simulator.instances,
     }
-
-
-def _file_model(path: str | Path, interface: str | None) -> FmuModel:
-    """Return the model of the file at ``path`` for a caller that holds only the path.
-
-    Parsed again only when the file changes (its modification time or size), so that such a
-    caller, e.g. a script simulating in a loop, does not parse the FMU on every run.
-    """
-    try:
-        st = Path(path).stat()
-    except OSError as exc:
-        raise FmuError(f"FMU {path} does not exist") from exc
-    key = (
-        str(Path(path).resolve()),
-        st.st_mtime_ns,
-        st.st_size,
-        INTERFACES.get(interface, interface),
-    )
-    model = _BY_FILE.get(key)
-    if model is None:
-        model = FmuModel(path, interface)
-        if len(_BY_FILE) >= FILE_MODELS:
-            _BY_FILE.pop(next(iter(_BY_FILE)))
-        _BY_FILE[key] = model
-    return model
 
 
 def get_simulator(
@@ -84,27 +60,21 @@ def get_simulator(
     every ``FMUID_RECYCLE_RUNS`` runs.
 
     ``fmu`` and ``interface`` are as for :class:`SimulatorBase`; the engine hands on the parsed
-    model (a file given by path is parsed again only when it changes).
+    model (a file given by path is parsed again only when it changes: :func:`model_of_file`).
     """
-    global _CACHE_PID
-    if _CACHE_PID != os.getpid():
-        _CACHE.clear()
-        _CACHE_PID = os.getpid()
-    model = as_model(fmu, interface) if isinstance(fmu, FmuModel) else _file_model(fmu, interface)
-    thread = threading.get_ident()
-    key = (model.key, thread)
-    simulator = _CACHE.get(key)
-    if isinstance(simulator, Simulator) and (
-        simulator.reset_reliable is False or model.key in _UNRELIABLE
-    ):
-        mark_reset_unreliable(model)
-        _CACHE.pop(key).close()
-        simulator = None
-    if simulator is None:
-        _, path, wanted = model.key
-        for old in [k for k in _CACHE if k[0][1:] == (path, wanted) and k[1] == thread]:
-            _CACHE.pop(old).close()
-        hosted = model.key in _UNRELIABLE
-        simulator = (HostedSimulator if hosted else Simulator)(model)
-        _CACHE[key] = simulator
-    return simulator
+    model = as_model(fmu, interface)
+    world = registry()
+
+    def keep(simulator: Simulator | HostedSimulator) -> bool:
+        if isinstance(simulator, Simulator) and (
+            simulator.reset_reliable is False or world.reset_unreliable(model.key)
+        ):
+            world.mark_reset_unreliable(model.key)
+            return False
+        return True
+
+    def make() -> Simulator | HostedSimulator:
+        hosted = world.reset_unreliable(model.key)
+        return (HostedSimulator if hosted else Simulator)(model)
+
+    return world.simulator(model.key, make, keep)

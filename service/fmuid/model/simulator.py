@@ -20,7 +20,6 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import fmpy
 import numpy as np
 
 from fmuid.errors import FmuError
@@ -78,7 +77,7 @@ class Simulator(SimulatorBase):
         super().__init__(fmu, interface, input_step)
         self._unzip_dir = tempfile.mkdtemp(prefix="fmuid-fmu-")
         self._cleanup = weakref.finalize(self, _remove_tree, self._unzip_dir, os.getpid())
-        fmpy.extract(str(self.path), unzipdir=self._unzip_dir)
+        self.model.extract(self._unzip_dir)
         self._instance = Instance(self.model, self._unzip_dir)
         self._instance.instantiate()
         self._fresh = True

@@ -15,7 +15,6 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from typing import Any
 
-import fmpy
 import numpy as np
 
 from fmuid.errors import FmuError
@@ -134,7 +133,7 @@ def held_parameters(model: FmuModel, values: Mapping[str, float | str]) -> dict[
     variables = [model.parameters[n] for n in numeric]
     channels = Channels(variables, model.fmi_version)
     with tempfile.TemporaryDirectory(prefix="fmuid-readback-") as folder:
-        fmpy.extract(str(model.path), unzipdir=folder)
+        model.extract(folder)
         instance = Instance(model, folder)
         try:
             instance.instantiate()

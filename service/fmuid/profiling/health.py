@@ -244,7 +244,7 @@ def ignored_parameters(
     predictor = problem.predictor
     if not dead or not isinstance(predictor, FmuPredictor):
         return dead
-    values = {**predictor.fixed, **problem.from_z(z_hat)}
+    values = predictor.fmu_values(problem.from_z(z_hat), problem.experiments[0])
     model = predictor.model
     try:
         held = held_parameters(model, values)
@@ -255,7 +255,11 @@ def ignored_parameters(
             function=exc.function,
             status=exc.status,
         ) from exc
-    ignored = [n for n in dead if not np.isclose(held[n], float(values[n]), rtol=1e-9, atol=0.0)]
+    ignored = [
+        n
+        for n in dead
+        if n in held and not np.isclose(held[n], float(values[n]), rtol=1e-9, atol=0.0)
+    ]
     if ignored:
         said = ", ".join(f"{n} set to {float(values[n]):.6g} holds {held[n]:.6g}" for n in ignored)
         raise FmuError(
@@ -310,7 +314,6 @@ def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
         return None
     if get_simulator(predictor.model).reset_reliable is False:
         return False
-    values = {**predictor.fixed, **problem.from_z(z_hat)}
     reused = problem.predict(problem.from_z(z_hat))
     try:
         sim = Simulator(predictor.model, reset_reliable=False)
@@ -319,6 +322,7 @@ def _fresh_matches(problem: Problem, z_hat: np.ndarray) -> bool | None:
     try:
         for exp, out in zip(problem.experiments, reused, strict=True):
             t_in, u = predictor.inputs_of(exp)
+            values = predictor.fmu_values(problem.from_z(z_hat), exp)
             y = sim.simulate(values, t_in, u, exp.time, problem.outputs)
             counted()
             if not all(

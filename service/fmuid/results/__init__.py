@@ -226,7 +226,8 @@ def _fit(m: FitResultOut | ProfileResultOut, data: dict[str, Any]) -> FitResult:
 
 
 def _validation(v: ValidationOut) -> ValidationEntry:
-    return ValidationEntry(**{**v.fields(), "rms_by_step": tuple(v.rms_by_step)})
+    fields = {k: x for k, x in v.fields().items() if k != "initial_states_method"}
+    return ValidationEntry(**{**fields, "rms_by_step": tuple(v.rms_by_step)})
 
 
 def _point(p: ProfilePointOut) -> ProfilePoint:
