@@ -72,10 +72,14 @@ def absorbed(
 ) -> dict[str, Any]:
     """Profile the original parameters before and after; return the comparison.
 
+    A per-experiment value (an initial state, ``Spec.per_experiment``) is left out: one per
+    record, it would double the profiles for every record added and says nothing of the physics.
+
     ``augmented`` must be set at the study's confidence (its added parameters are free but not
     profiled).
     """
-    names = list(base.names)
-    before = profile_problem(base, base_fit, workers=workers, options=walk)
+    names = base.shared_names
+    only = names if len(names) < base.n_free else None
+    before = profile_problem(base, base_fit, only=only, workers=workers, options=walk)
     after = profile_problem(augmented, augmented_fit, only=names, workers=workers, options=walk)
     return compare(before, after, names)

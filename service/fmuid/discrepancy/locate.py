@@ -10,7 +10,6 @@ from scipy import stats
 
 from fmuid.discrepancy import residual_tests as rt
 from fmuid.estimation.optimize import FitOptions, refine
-from fmuid.estimation.per_experiment import split
 from fmuid.estimation.predictor import merged_inputs
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
@@ -98,7 +97,7 @@ def experiments_disagree(problem: Problem, fit: FitResult, max_nfev: int) -> rt.
     unidentifiable). A concealed effect often shows here:
     each experiment hides it with other parameter values.
     """
-    shared = [n for n in problem.names if split(n, problem.spec.per_experiment) is None]
+    shared = problem.shared_names
     if len(problem.experiments) < 2 or not shared:
         return None
     separate = 0.0

@@ -127,6 +127,11 @@ class Problem:
         return len(self.names)
 
     @property
+    def shared_names(self) -> list[str]:
+        """The free parameters every experiment shares (all but the per-experiment values)."""
+        return [n for n in self.names if split(n, self.spec.per_experiment) is None]
+
+    @property
     def z_lower(self) -> np.ndarray:
         """Lower bounds in fitted coordinates."""
         return self.space.z_lower
