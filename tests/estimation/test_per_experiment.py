@@ -115,7 +115,7 @@ def test_each_record_gets_its_own_initial_state_and_the_test_record_too(two_tank
     test = record(*TEST, seed=7)
     fit = fmuid.fit(two_tanks_fmu, data, study(), test_data=[test])
     assert list(fit.names) == NAMES
-    assert fit.problem.shared_names == SHARED
+    assert fit.problem.shared_names == list(SHARED)
     expected = reference_fit(data)
     got = np.array([fit.estimates[n] for n in NAMES])
     np.testing.assert_allclose(got, expected, rtol=1e-4, atol=1e-4)
