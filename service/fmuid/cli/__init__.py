@@ -123,65 +123,40 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _cmd_fit(args: argparse.Namespace) -> int:
-    import fmuid
-
+def _run_study(
+    args: argparse.Namespace, stage: Callable[..., Any], summary: Callable[[Any], str], **kw: Any
+) -> int:
+    """Run a stage on the command's study: write its JSON (and report), print its summary."""
     fmu, experiments, spec, problem = _load_inputs(args)
     tests = _test_data(args)
     with ProgressDisplay() as progress:
-        result = fmuid.fit(
-            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests
+        result = stage(
+            fmu, experiments, spec, progress=progress, problem=problem, test_data=tests, **kw
         )
     _write_json(Path(args.out), result.to_dict())
     if args.report:
         _report(result, args, problem)
-    print(fit_table(result))  # noqa: T201
+    print(summary(result))  # noqa: T201
     return EXIT_OK
+
+
+def _cmd_fit(args: argparse.Namespace) -> int:
+    import fmuid
+
+    return _run_study(args, fmuid.fit, fit_table)
 
 
 def _cmd_profile(args: argparse.Namespace) -> int:
     import fmuid
 
-    fmu, experiments, spec, problem = _load_inputs(args)
-    tests = _test_data(args)
-    with ProgressDisplay() as progress:
-        result = fmuid.profile(
-            fmu,
-            experiments,
-            spec,
-            workers=args.workers,
-            progress=progress,
-            problem=problem,
-            test_data=tests,
-        )
-    _write_json(Path(args.out), result.to_dict())
-    if args.report:
-        _report(result, args, problem)
-    print(profile_table(result))  # noqa: T201
-    return EXIT_OK
+    return _run_study(args, fmuid.profile, profile_table, workers=args.workers)
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from fmuid.discrepancy import DiagnoseOptions, diagnose
 
-    fmu, experiments, spec, problem = _load_inputs(args)
-    tests = _test_data(args)
     options = DiagnoseOptions(workers=args.workers or os.cpu_count() or 1)
-    with ProgressDisplay() as progress:
-        result = diagnose(
-            fmu,
-            experiments,
-            spec,
-            options=options,
-            progress=progress,
-            problem=problem,
-            test_data=tests,
-        )
-    _write_json(Path(args.out), result.to_dict())
-    if args.report:
-        _report(result, args, problem)
-    print(result.to_dict()["verdict"])  # noqa: T201
-    return EXIT_OK
+    return _run_study(args, diagnose, lambda result: result.verdict(), options=options)
 
 
 def _cmd_design(args: argparse.Namespace) -> int:
