@@ -13,6 +13,7 @@ import ctypes
 import os
 import resource
 import signal
+from collections.abc import Iterator
 from pathlib import Path
 
 PR_SET_PDEATHSIG = 1
@@ -75,8 +76,11 @@ def is_alive(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] not in ("Z", "X")
 
 
-def kill_session(sid: int) -> None:
-    """Send SIGKILL to every process whose session id is ``sid``."""
+def process_stats() -> Iterator[tuple[int, list[str]]]:
+    """Yield each live process's pid and the fields of its ``/proc`` stat after the command.
+
+    The fields start with the state, then the parent's pid, the process group and the session.
+    """
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
@@ -84,10 +88,15 @@ def kill_session(sid: int) -> None:
             stat = (entry / "stat").read_text()
         except OSError:
             continue
-        fields = stat[stat.rindex(")") + 2 :].split()
+        yield int(entry.name), stat[stat.rindex(")") + 2 :].split()
+
+
+def kill_session(sid: int) -> None:
+    """Send SIGKILL to every process whose session id is ``sid``."""
+    for pid, fields in process_stats():
         if int(fields[3]) == sid:
             try:
-                os.kill(int(entry.name), signal.SIGKILL)
+                os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:
                 pass
 

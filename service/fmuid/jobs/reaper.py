@@ -21,9 +21,8 @@ import logging
 import os
 import signal
 import threading
-from pathlib import Path
 
-from fmuid.processes import die_with_parent
+from fmuid.processes import die_with_parent, process_stats
 
 logger = logging.getLogger(__name__)
 
@@ -33,17 +32,7 @@ FREEZE_ROUNDS = 50
 
 def _parents() -> dict[int, int]:
     """Map every live pid to its parent's pid."""
-    parents = {}
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-        except OSError:
-            continue
-        fields = stat.rsplit(")", 1)[1].split()
-        parents[int(entry.name)] = int(fields[1])
-    return parents
+    return {pid: int(fields[1]) for pid, fields in process_stats()}
 
 
 def descendants(root: int) -> list[int]:
