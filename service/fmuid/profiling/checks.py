@@ -159,3 +159,38 @@ def jumps(side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: flo
                 out.append(k1)
         slope_prev = slope if risen else None
     return out
+
+
+#: A step along which the other parameters' rate of change (per unit of the profiled one, in
+#: fractions of their ranges) changes by more than this multiple of the previous step's rate
+#: is a switch of valley...
+SWITCH_RATIO = 1.0
+#: ...when the change is also at least this large (a range per range: slow drifts are smooth).
+SWITCH_FLOOR = 0.5
+
+
+def switches(side: Sequence[WalkPoint], index: int, problem_span: np.ndarray) -> list[int]:
+    """Positions in ``side`` where the re-fit of the other parameters jumped to another valley.
+
+    Along one valley the other parameters move smoothly with the profiled one; their rate of
+    change per step (span-normalised) changes by a small fraction of itself from one step to
+    the next. A change larger than ``SWITCH_RATIO`` times the previous rate and than
+    ``SWITCH_FLOOR`` marks the point after it: the walk may have left the valley it followed
+    there (or joined a lower one), whatever its chi2 path looks like.
+    """
+    ok = [(k, p) for k, p in enumerate(side) if p.ok]
+    others = np.ones(len(problem_span), bool)
+    others[index] = False
+    out = []
+    rate_prev = None
+    for (_, p0), (k1, p1) in zip(ok, ok[1:]):
+        dz = (p1.z - p0.z) / problem_span
+        if dz[index] == 0:
+            continue
+        rate = dz[others] / abs(dz[index])
+        if rate_prev is not None:
+            change = float(np.max(np.abs(rate - rate_prev)))
+            if change > max(SWITCH_FLOOR, SWITCH_RATIO * float(np.max(np.abs(rate_prev)))):
+                out.append(k1)
+        rate_prev = rate
+    return out
