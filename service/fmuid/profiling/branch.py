@@ -9,15 +9,17 @@ import numpy as np
 
 from fmuid.engine.count import counting
 from fmuid.estimation.problem import Problem
-from fmuid.profiling.checks import basins, diverse_starts, jumps, refit_from, switches
+from fmuid.profiling.checks import (
+    basins,
+    diverse_starts,
+    jumps,
+    refit_from,
+    switches,
+)
 from fmuid.profiling.ends import End, locate
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ProfileQuality
-from fmuid.profiling.walk import WalkOptions, first_step, walk
-
-#: An end whose half-width differs from the quadratic (Fisher) one by more than this fraction
-#: is non-parabolic and gets diverse-start checks.
-NON_PARABOLIC = 0.3
+from fmuid.profiling.walk import WalkOptions, first_step, path_tangent, walk
 
 
 @dataclass(frozen=True)
@@ -143,7 +145,15 @@ def settle_branch(
             for kind, t in thresholds.items()
         }
         sites = _sites(
-            problem, index, side, ends, chi2_hat, thresholds, sd_z, thorough or checks.always
+            problem,
+            index,
+            side,
+            ends,
+            chi2_hat,
+            thresholds,
+            sd_z,
+            thorough or checks.always,
+            None if jacobian is None else path_tangent(jacobian, index),
         )
         counts.jumps = max(counts.jumps, sum(1 for *_, why in sites if why != "end"))
         lower = None
@@ -215,6 +225,7 @@ def _sites(
     thresholds: dict[str, float],
     sd_z: float,
     thorough: bool,
+    tangent: np.ndarray | None,
 ) -> list[tuple[WalkPoint, bool, list[np.ndarray], str]]:
     """Points to check: ``(point, with diverse starts, neighbours' starts, why)``.
 
@@ -224,20 +235,17 @@ def _sites(
     """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
     out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []
-    for k in switches(side, index, problem.z_upper - problem.z_lower):
+    for k in switches(side, index, problem.z_lower, problem.z_upper, tangent):
         before = max(j for j in range(k) if side[j].ok)
         out.append((side[before], False, [side[k].z], "switch"))
         out.append((side[k], False, [side[before].z], "switch"))
-    z_hat_i = float(side[0].z[index])
     for kind in ("simultaneous", "pointwise"):
         end = ends.get(kind)
         if kind not in thresholds or end is None or end.point is None or end.z is None:
             continue
-        half = abs(end.z - z_hat_i)
-        quad = np.sqrt(thresholds[kind]) * sd_z
-        odd = not np.isfinite(quad) or abs(half / quad - 1.0) > NON_PARABOLIC
         on_bound = bool(problem.space.at_bound(end.point.z, skip=index))
-        out.append((end.point, thorough or odd or on_bound or bool(found), [], "end"))
+        diverse = thorough or not np.isfinite(sd_z) or on_bound or bool(found)
+        out.append((end.point, diverse, [], "end"))
     out.extend((side[k], True, [], "jump") for k in found)
     return out
 

@@ -8,7 +8,7 @@ estimate) and corrects it with Broyden's rank-one update from every run it makes
 costs its Gauss-Newton steps, one run each, two to four from a good start. The walk's points are
 real chi2 values at feasible parameters (never below the profile); the crossings are still
 located by full re-fits (:mod:`fmuid.profiling.ends`). When the steps stop descending or do not
-settle, the caller falls back to the full re-fit.
+settle, the caller re-fits fully from the lowest point they reached.
 """
 
 from __future__ import annotations
@@ -62,20 +62,22 @@ def quasi_refit(
     secant: Secant,
     tolerance: float,
     diff_step: float = 1e-6,
-) -> tuple[np.ndarray, float] | None:
+    fresh: bool = False,
+) -> tuple[np.ndarray, float, bool] | None:
     """Re-fit the ``free`` parameters from ``guess`` by Gauss-Newton steps on ``secant``.
 
     Each step is the least-squares step of the carried Jacobian, kept within the bounds and
     halved once when chi2 does not fall; every run corrects the Jacobian. A step that still
     does not descend renews the free columns by forward differences (relative step
-    ``diff_step``) once. It stops when the chi2 decrease the next step predicts is below
-    ``tolerance``.
+    ``diff_step``) once (``fresh``: at ``guess``, before the first step, and not again). It
+    stops when the chi2 decrease the next step predicts is below ``tolerance``.
 
     Returns
     -------
     tuple or None
-        The point and its chi2; ``None`` when a simulation fails, a step does not descend on a
-        renewed Jacobian either or ``MAX_STEPS`` steps do not settle (re-fit fully then).
+        The lowest point reached, its chi2 and whether it settled (``False`` when a step does
+        not descend on a renewed Jacobian either or ``MAX_STEPS`` steps do not settle: re-fit
+        fully from there); ``None`` when a simulation fails.
 
     """
     lo, hi = problem.z_lower, problem.z_upper
@@ -84,15 +86,15 @@ def quasi_refit(
         r = problem.residuals(z)
         secant.update(z, r)
         chi2 = float(r @ r)
-        renewed = False
+        renewed = fresh
+        if fresh:
+            _renew(problem, z, r, free, secant, diff_step)
         for _ in range(MAX_STEPS):
-            jf = secant.jac[:, free]
-            step = np.linalg.lstsq(jf, -r, rcond=None)[0]
-            if chi2 - float(np.sum((r + jf @ step) ** 2)) < tolerance:
-                return z, chi2
+            step, predicted = _step(secant.jac, r, z, free, lo, hi)
+            if predicted < tolerance:
+                return z, chi2, True
             for shrink in (1.0, 0.5):
-                trial = z.copy()
-                trial[free] = np.clip(z[free] + shrink * step, lo[free], hi[free])
+                trial = np.clip(z + shrink * step, lo, hi)
                 r_new = problem.residuals(trial)
                 secant.update(trial, r_new)
                 if float(r_new @ r_new) < chi2:
@@ -100,12 +102,34 @@ def quasi_refit(
                     break
             else:
                 if renewed:
-                    return None
+                    return z, chi2, False
                 _renew(problem, z, r, free, secant, diff_step)
                 renewed = True
     except FmuError:
         return None
-    return None
+    return z, chi2, False
+
+
+def _step(
+    jac: np.ndarray, r: np.ndarray, z: np.ndarray, free: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, float]:
+    """Return the Gauss-Newton step of the free parameters and the chi2 decrease it predicts.
+
+    A parameter on a bound that the step would push outwards is held there (active set).
+    """
+    edge = 1e-8 * (hi - lo)
+    active = free.copy()
+    step = np.zeros_like(z)
+    while active.any():
+        step = np.zeros_like(z)
+        step[active] = np.linalg.lstsq(jac[:, active], -r, rcond=None)[0]
+        out = active & (((z <= lo + edge) & (step < 0)) | ((z >= hi - edge) & (step > 0)))
+        if not out.any():
+            break
+        active &= ~out
+    else:
+        return step, 0.0
+    return step, float(r @ r) - float(np.sum((r + jac @ step) ** 2))
 
 
 def _renew(

@@ -175,9 +175,11 @@ def walk(
                 problem, guess, free, secant, options.quasi_tol * threshold, options.refit.diff_step
             )
         try:
-            z, chi2 = (
-                cheap if cheap else refine(problem, guess, free=free, options=options.refit)[:2]
-            )
+            if cheap is not None and cheap[2]:
+                z, chi2 = cheap[0], cheap[1]
+            else:
+                start = guess if cheap is None else cheap[0]
+                z, chi2, _ = refine(problem, start, free=free, options=options.refit)
         except FmuidError as exc:
             z, chi2 = guess, float("nan")
             points.append(WalkPoint(guess, chi2, str(exc)))
