@@ -196,14 +196,16 @@ def _refit(
     """Re-fit at a guess of the crossing: Gauss-Newton on a fresh Jacobian, else trust-region.
 
     The Gauss-Newton steps (:func:`fmuid.profiling.quasi.quasi_refit`) stop when the next
-    would lower chi2 by less than ``tolerance``; where they do not settle, ``refine`` goes on
-    from the lowest point they reached.
+    would lower chi2 by less than ``tolerance``; where they do not settle, or the re-fits are
+    polished (a non-smooth objective, where finite differences mislead), ``refine`` runs
+    from ``start``.
     """
-    secant = Secant(np.zeros((problem.n_data, problem.n_free)), start)
-    cheap = quasi_refit(problem, start, free, secant, tolerance, options.diff_step, fresh=True)
-    if cheap is not None and cheap[2]:
-        return cheap[0], cheap[1]
-    z, chi2, _ = refine(problem, start if cheap is None else cheap[0], free=free, options=options)
+    if not options.polish:
+        secant = Secant(np.zeros((problem.n_data, problem.n_free)), start)
+        cheap = quasi_refit(problem, start, free, secant, tolerance, options.diff_step, fresh=True)
+        if cheap is not None and cheap[2]:
+            return cheap[0], cheap[1]
+    z, chi2, _ = refine(problem, start, free=free, options=options)
     return z, chi2
 
 

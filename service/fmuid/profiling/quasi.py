@@ -22,6 +22,12 @@ from fmuid.estimation.problem import Problem
 
 #: Steps of one cheap re-fit before it gives up (the caller then re-fits fully).
 MAX_STEPS = 6
+#: Directions of the Jacobian weaker than this fraction of its strongest are left out of a
+#: step (a flat valley's direction would otherwise take the step far off).
+RCOND = 1e-6
+#: A step on a renewed Jacobian that lowers chi2 by less than this fraction of the decrease it
+#: predicted shows a strongly nonlinear valley: the trust-region re-fit takes over at once.
+POOR = 0.25
 
 
 @dataclass
@@ -70,7 +76,8 @@ def quasi_refit(
     halved once when chi2 does not fall; every run corrects the Jacobian. A step that still
     does not descend renews the free columns by forward differences (relative step
     ``diff_step``) once (``fresh``: at ``guess``, before the first step, and not again). It
-    stops when the chi2 decrease the next step predicts is below ``tolerance``.
+    stops when the chi2 decrease the next step predicts is below ``tolerance``, and gives up
+    when a step on a renewed Jacobian achieves less than ``POOR`` of its predicted decrease.
 
     Returns
     -------
@@ -98,7 +105,10 @@ def quasi_refit(
                 r_new = problem.residuals(trial)
                 secant.update(trial, r_new)
                 if float(r_new @ r_new) < chi2:
+                    poor = renewed and chi2 - float(r_new @ r_new) < POOR * shrink * predicted
                     z, r, chi2 = trial, r_new, float(r_new @ r_new)
+                    if poor:
+                        return z, chi2, False
                     break
             else:
                 if renewed:
@@ -122,7 +132,7 @@ def _step(
     step = np.zeros_like(z)
     while active.any():
         step = np.zeros_like(z)
-        step[active] = np.linalg.lstsq(jac[:, active], -r, rcond=None)[0]
+        step[active] = np.linalg.lstsq(jac[:, active], -r, rcond=RCOND)[0]
         out = active & (((z <= lo + edge) & (step < 0)) | ((z >= hi - edge) & (step > 0)))
         if not out.any():
             break

@@ -51,7 +51,8 @@ class WalkOptions:
     quasi_tol
         The walk's points are re-fitted by Gauss-Newton steps on a carried Jacobian
         (:mod:`fmuid.profiling.quasi`) until the next step would lower chi2 by less than this
-        fraction of the simultaneous threshold (0: full trust-region re-fits at every point).
+        fraction of the simultaneous threshold (0, or polished re-fits for a non-smooth
+        objective: full re-fits at every point).
     overshoot
         Past the first point over the simultaneous threshold, walk on until the distance from
         the estimate is ``1 + overshoot`` times that point's, in ``OVERSHOOT_STEPS`` equal steps
@@ -157,7 +158,7 @@ def walk(
     reach: float | None = None
     tangent = None if jacobian is None or len(path) > 1 else path_tangent(jacobian, index)
     secant = None
-    if jacobian is not None and options.quasi_tol > 0:
+    if jacobian is not None and options.quasi_tol > 0 and not options.refit.polish:
         secant = Secant(-np.array(jacobian, dtype=float), path[-1].z.copy())
     if last_ok.chi2 - chi2_hat > threshold * (1.0 + options.margin) and options.overshoot <= 0:
         return points, None
