@@ -229,16 +229,16 @@ def _sites(
 ) -> list[tuple[WalkPoint, bool, list[np.ndarray], str]]:
     """Points to check: ``(point, with diverse starts, neighbours' starts, why)``.
 
-    First both sides of each switch of valley (:func:`fmuid.profiling.checks.switches`), each
-    re-fitted from the other side's valley (two cheap re-fits); then the outermost end, the
-    other end and the jumps of the chi2 path.
+    First the point before each switch of valley (:func:`fmuid.profiling.checks.switches`),
+    re-fitted from the valley the walk switched to (one re-fit from a nearby minimum; the point
+    after it needs none: its re-fit started from the old valley and descended out of it); then
+    the outermost end, the other end and the jumps of the chi2 path.
     """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
     out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []
     for k in switches(side, index, problem.z_lower, problem.z_upper, tangent):
         before = max(j for j in range(k) if side[j].ok)
         out.append((side[before], False, [side[k].z], "switch"))
-        out.append((side[k], False, [side[before].z], "switch"))
     for kind in ("simultaneous", "pointwise"):
         end = ends.get(kind)
         if kind not in thresholds or end is None or end.point is None or end.z is None:

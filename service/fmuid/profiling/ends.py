@@ -158,6 +158,7 @@ def _root(
     best = b
     guess = _secant(za, fa, zb, fb)
     refits, last_side = 0, 0
+    newton = not options.polish
     while refits < MAX_REFITS:
         if abs(zb - za) <= tolerance * abs(guess - z_hat_i):
             return End(guess, best, refits)
@@ -165,7 +166,7 @@ def _root(
         start = (1.0 - w) * a.z + w * b.z
         start[index] = guess
         try:
-            z, chi2 = _refit(problem, start, free, options, END_TOL * threshold)
+            z, chi2, newton = _refit(problem, start, free, options, END_TOL * threshold, newton)
         except FmuidError:
             return End(guess, best, refits + 1, settled=False)
         refits += 1
@@ -191,22 +192,28 @@ def _root(
 
 
 def _refit(
-    problem: Problem, start: np.ndarray, free: np.ndarray, options: FitOptions, tolerance: float
-) -> tuple[np.ndarray, float]:
+    problem: Problem,
+    start: np.ndarray,
+    free: np.ndarray,
+    options: FitOptions,
+    tolerance: float,
+    newton: bool,
+) -> tuple[np.ndarray, float, bool]:
     """Re-fit at a guess of the crossing: Gauss-Newton on a fresh Jacobian, else trust-region.
 
-    The Gauss-Newton steps (:func:`fmuid.profiling.quasi.quasi_refit`) stop when the next
-    would lower chi2 by less than ``tolerance``; where they do not settle, or the re-fits are
-    polished (a non-smooth objective, where finite differences mislead), ``refine`` runs
-    from ``start``.
+    The Gauss-Newton steps (:func:`fmuid.profiling.quasi.quasi_refit`, when ``newton``) stop
+    when the next would lower chi2 by less than ``tolerance``; where they do not settle,
+    ``refine`` runs from ``start``. Returns the point, its chi2 and whether Gauss-Newton is
+    worth trying at the next guess of this crossing (not after it failed here, nor for
+    polished re-fits: a non-smooth objective, where finite differences mislead).
     """
-    if not options.polish:
+    if newton:
         secant = Secant(np.zeros((problem.n_data, problem.n_free)), start)
         cheap = quasi_refit(problem, start, free, secant, tolerance, options.diff_step, fresh=True)
         if cheap is not None and cheap[2]:
-            return cheap[0], cheap[1]
+            return cheap[0], cheap[1], True
     z, chi2, _ = refine(problem, start, free=free, options=options)
-    return z, chi2
+    return z, chi2, False
 
 
 def _secant(za: float, fa: float, zb: float, fb: float) -> float:
