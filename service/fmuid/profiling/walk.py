@@ -80,6 +80,9 @@ class WalkOptions:
     quasi_tol: float = 2e-4
 
 
+#: Consecutive points where the Gauss-Newton re-fit did not settle after which the walk
+#: re-fits by trust region only (a strongly nonlinear profile).
+MAX_MISSES = 2
 #: Points walked past the first crossing when ``overshoot`` is set.
 OVERSHOOT_STEPS = 6
 
@@ -110,7 +113,8 @@ def walk(
     path's Gauss-Newton tangent at the optimum, or along that tangent alone, when there are
     fewer; linear without ``jacobian``). Given ``jacobian``, the re-fits are Gauss-Newton steps
     on that Jacobian carried along the walk (:func:`fmuid.profiling.quasi.quasi_refit`; a full
-    re-fit where they do not settle). The step aims at a
+    re-fit where they do not settle, and for the rest of the walk after ``MAX_MISSES`` in a
+    row). The step aims at a
     rise of the signed root ``sqrt(chi2 - chi2_hat)`` by ``sqrt(rise_per_step * threshold)``,
     starting from ``step`` and adapted from the rise actually seen (a parabolic profile is
     walked in equal steps); a step that overshoots is retried shorter.
@@ -158,6 +162,7 @@ def walk(
     reach: float | None = None
     tangent = None if jacobian is None or len(path) > 1 else path_tangent(jacobian, index)
     secant = None
+    misses = 0
     if jacobian is not None and options.quasi_tol > 0 and not options.refit.polish:
         secant = Secant(-np.array(jacobian, dtype=float), path[-1].z.copy())
     if last_ok.chi2 - chi2_hat > threshold * (1.0 + options.margin) and options.overshoot <= 0:
@@ -178,7 +183,11 @@ def walk(
         try:
             if cheap is not None and cheap[2]:
                 z, chi2 = cheap[0], cheap[1]
+                misses = 0
             else:
+                misses += 1
+                if misses >= MAX_MISSES:
+                    secant = None
                 start = guess if cheap is None else cheap[0]
                 z, chi2, _ = refine(problem, start, free=free, options=options.refit)
         except FmuidError as exc:
