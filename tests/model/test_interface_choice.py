@@ -14,6 +14,8 @@ import fmuid
 from fmuid.cli import main
 from fmuid.data import Experiment, experiment_from_arrays, spec_from_json
 from fmuid.errors import SpecError
+from fmuid.model.fmu import model_of_file
+from fmuid.model.registry import get_simulator
 
 from .foreign import model_exchange_only, reference_fmu
 
@@ -127,3 +129,12 @@ def test_simulate_takes_the_interface_from_a_fixed_only_spec(
         == 2
     )
     assert "interface: 'cvode' is not one of" in capsys.readouterr().err
+
+
+def test_another_interface_leaves_the_files_model_as_it_was() -> None:
+    both = reference_fmu("fmi3", "VanDerPol")
+    model = model_of_file(both)
+    other = model.with_interface("model_exchange")
+    assert (model.interface, other.interface) == ("CoSimulation", "ModelExchange")
+    assert model_of_file(both) is model
+    assert get_simulator(both).model.interface == "CoSimulation"

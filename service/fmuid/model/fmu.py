@@ -214,6 +214,16 @@ class FmuModel:
         """Pickle as the :class:`FmuFile`: the receiving process parses it once."""
         return (load_model, (self.file,))
 
+    def __copy__(self) -> FmuModel:
+        """Return a new object with this model's state (not the process's model of its file).
+
+        Without it, :func:`copy.copy` would go through :meth:`__reduce__` and hand back the
+        registry's model itself, which :meth:`with_interface` would then change for every holder.
+        """
+        other = object.__new__(type(self))
+        other.__dict__.update(self.__dict__)
+        return other
+
     def extract(self, folder: str | Path) -> None:
         """Unpack the FMU, as read and hashed, into ``folder`` (the zip is not opened again)."""
         self._zip.extractall(folder)
