@@ -104,6 +104,18 @@ static int step(FmuidLoop *L, double t, double h) {
     return (status <= 1 && L->terminate) ? 2 : status;
 }
 
+/* Read the outputs into y and copy them to every result row read at point k (none: no call). */
+static int store_rows(FmuidLoop *L, long k, double *y) {
+    if (L->row_start[k + 1] == L->row_start[k]) return 0;
+    int status = get_values(L, y);
+    if (status > 1) return status;
+    for (long r = L->row_start[k]; r < L->row_start[k + 1]; r++) {
+        double *row = L->result + L->rows[r] * L->n_out;
+        for (long o = 0; o < L->n_out; o++) row[o] = y[o];
+    }
+    return status;
+}
+
 static int failed(FmuidLoop *L, int status, long k, int call, double t) {
     L->fail_k = k;
     L->fail_call = call;
@@ -154,14 +166,8 @@ int fmuid_cosimulation(FmuidLoop *L) {
                                                    L->orders, u);
             if (status > 1) return failed(L, status, k, CALL_DERIVATIVES, t);
         }
-        if (L->row_start[k + 1] > L->row_start[k]) {
-            status = get_values(L, y);
-            if (status > 1) return failed(L, status, k, CALL_GET, t);
-            for (long r = L->row_start[k]; r < L->row_start[k + 1]; r++) {
-                double *row = L->result + L->rows[r] * L->n_out;
-                for (long o = 0; o < L->n_out; o++) row[o] = y[o];
-            }
-        }
+        status = store_rows(L, k, y);
+        if (status > 1) return failed(L, status, k, CALL_GET, t);
         if (k == last) break;
         if (L->moving != NULL && L->moving[k]) {
             status = sub_steps(L, k, t, L->times[k + 1] - t);
@@ -233,14 +239,8 @@ int fmuid_feedback(FmuidLoop *L, FmuidTerms *F) {
                                                    L->orders, u);
             if (status > 1) return failed(L, status, k, CALL_DERIVATIVES, t);
         }
-        if (L->row_start[k + 1] > L->row_start[k]) {
-            status = get_values(L, y);
-            if (status > 1) return failed(L, status, k, CALL_GET, t);
-            for (long r = L->row_start[k]; r < L->row_start[k + 1]; r++) {
-                double *row = L->result + L->rows[r] * L->n_out;
-                for (long o = 0; o < L->n_out; o++) row[o] = y[o];
-            }
-        }
+        status = store_rows(L, k, y);
+        if (status > 1) return failed(L, status, k, CALL_GET, t);
         if (k == last) break;
         if (k == 0 || update) {
             for (long j = 0; j < F->n_src; j++) F->previous[j] = F->level[j];
