@@ -31,7 +31,7 @@ from fmuid.data.limits import over_limit
 from fmuid.errors import FmuidError, SpecError
 from fmuid.estimation.check import check_study
 from fmuid.intake.fmucheck import FmuLimits, check_fmu
-from fmuid.jobs.reaper import kill_tree, reap_children
+from fmuid.jobs.reaper import end_tree, reap_children
 from fmuid.jobs.records import TEST_DATA
 from fmuid.model.fmu import FmuModel
 from fmuid.processes import allow_cpu_seconds, become_subreaper, limit_memory, memory_limit_mb
@@ -195,7 +195,7 @@ def _watch_parent(parent: int) -> None:
     """End this process once the service that started it is gone."""
     while os.getppid() == parent:
         time.sleep(0.5)
-    kill_tree(os.getpid(), include_root=False)
+    end_tree(os.getpid())
     os._exit(1)
 
 
@@ -211,7 +211,7 @@ def main(argv: list[str]) -> int:
     answers.flush()
     for line in sys.stdin:
         answer = _answer(VetTask(**json.loads(line)))
-        kill_tree(os.getpid(), include_root=False)  # what the probed binary left behind
+        end_tree(os.getpid())  # what the probed binary left behind
         reap_children()
         recycle = answer.pop("recycle", False) or _resident_mb() > RECYCLE_RSS_MB
         answers.write(json.dumps(answer) + "\n")

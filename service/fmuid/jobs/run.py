@@ -34,7 +34,7 @@ from fmuid.intake.inputs import load_job_inputs
 from fmuid.jobs.crash import FMI_VERSION_LINE, STORE_FAILED_EXIT, crash_message, memory_message
 from fmuid.jobs.health import free_space_problem
 from fmuid.jobs.kinds import RunContext, runner
-from fmuid.jobs.reaper import end_tree_on_parent_death, kill_tree
+from fmuid.jobs.reaper import end_tree, end_tree_on_parent_death
 from fmuid.jobs.store import Job, JobStore, StoreError
 from fmuid.model.fmu import model_of_file
 from fmuid.model.world import open_registry
@@ -60,7 +60,7 @@ def enforce_time_limit(store: JobStore, job_id: str, timeout_s: float) -> None:
         try:
             store.fail(job_id, f"exceeded the time limit of {timeout_s:g} s")
         finally:
-            kill_tree(os.getpid(), include_root=False)
+            end_tree(os.getpid())
             kill_group(os.getpgrp())
 
     watchdog = threading.Timer(timeout_s, expire)
@@ -203,10 +203,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout-s", type=float, required=True)
     parser.add_argument("--dask-scheduler", default=None)
     parser.add_argument("--min-free-bytes", type=int, default=0)
+    parser.add_argument("--service-pid", type=int, default=None)
     args = parser.parse_args(argv)
     limit_memory(args.memory_mb)
     become_subreaper()  # whatever the job starts stays below it (fmuid.jobs.reaper)
-    end_tree_on_parent_death()
+    end_tree_on_parent_death(args.service_pid)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     logger.info("job %s in process %d, started by %d", args.job_id, os.getpid(), os.getppid())
     store = JobStore(args.db, args.data_dir)
@@ -222,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
         logger.exception("job %s could not record its outcome", job.id)
         return STORE_FAILED_EXIT
     finally:
-        kill_tree(os.getpid(), include_root=False)
+        end_tree(os.getpid())
 
 
 if __name__ == "__main__":

@@ -256,6 +256,8 @@ class Supervisor:
             str(self.settings.job_timeout_s),
             "--min-free-bytes",
             str(self.settings.min_free_bytes),
+            "--service-pid",
+            str(os.getpid()),
         ]
         if self.settings.dask_scheduler:
             args += ["--dask-scheduler", self.settings.dask_scheduler]
