@@ -9,8 +9,11 @@ import numpy as np
 import pytest
 
 from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.data.spec import ParameterSpec
 from fmuid.discrepancy.catalogue import TIME_FLOOR, catalogue
-from fmuid.discrepancy.knowledge import model_knowledge, read_annotations
+from fmuid.discrepancy.effects import FeedbackPolynomial
+from fmuid.discrepancy.knowledge import AddedParameter, model_knowledge, read_annotations
+from fmuid.discrepancy.words import Words
 from fmuid.estimation.study import make_problem
 
 PACKAGE = Path(__file__).resolve().parents[2] / "service" / "fmuid" / "discrepancy"
@@ -101,3 +104,15 @@ def test_the_diagnosis_code_names_no_model() -> None:
         text = path.read_text()
         for word in ("tractor", "TRACTOR", '"delta"', "gam_t", "x_tc"):
             assert word not in text, f"{path.name} names {word}"
+
+
+def test_a_polynomial_coefficient_unit_names_only_the_units_declared() -> None:
+    both = Words({"f": "N", "x": "m"})
+    assert both.per_power("f", "x", 3) == "N/m^3"
+    assert Words({"x": "m"}).per_power("f", "x", 2) == "1/m^2"
+    assert Words({"f": "N"}).per_power("f", "x", 2) == "N"
+    assert Words().per_power("f", "x", 2) == ""
+    spec = ParameterSpec(start=0.0, lower=-1.0, upper=1.0, scale="lin")
+    p = AddedParameter("c2_h_u", "", "h^2 fed into u", spec, 0.0, "inside")
+    sentence = FeedbackPolynomial("u", (p,), Words(), source="h", power=2).sentence({"c2_h_u": -2})
+    assert sentence.endswith("(an even static nonlinearity the model leaves out, c2_h_u = -2)")

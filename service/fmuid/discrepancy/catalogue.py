@@ -248,8 +248,7 @@ def _feedback_effects(
         for y in problem.outputs:
             y_size = s.size(y)
             for k in POWERS:
-                name = f"c{k}_{y}_{u}"
-                unit = f"{w.unit(u)}/{w.unit(y)}^{k}" if w.unit(u) or w.unit(y) else ""
+                name, unit = f"c{k}_{y}_{u}", w.per_power(u, y, k)
                 p = _nonlinear(name, unit, f"{y}^{k} fed into {u}", 4 * u_size / y_size**k)
                 out.append(fx.FeedbackPolynomial(u, (p,), w, source=y, power=k))
         for source, (rate, derivative) in rate_of.items():

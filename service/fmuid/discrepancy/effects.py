@@ -312,7 +312,7 @@ class FeedbackPolynomial(Effect):
         c = self.value(values)
         w = self.words
         power = ORDINAL.get(self.power, f"power {self.power}")
-        unit = f"{w.unit(self.target)}/{w.unit(self.source)}^{self.power}".strip("/^")
+        unit = w.per_power(self.target, self.source, self.power)
         coefficient = f"{self.parameters[0].name} = {num(c)} {unit}".rstrip()
         force, level = w.quantity(self.target), w.quantity(self.source)
         if force in ("force", "torque") and level in ("displacement", "angle"):

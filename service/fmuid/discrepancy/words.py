@@ -34,6 +34,17 @@ class Words:
         """Return the declared unit of a variable ('' when none)."""
         return self.units.get(name, "") or ""
 
+    def per_power(self, target: str, source: str, power: int) -> str:
+        """Return the unit of a coefficient taking ``source**power`` into ``target``.
+
+        ``N/m^3`` for a force driven by the cube of a displacement; ``1/m^2`` when the target
+        has no unit; the target's unit when the source has none; '' when neither has one.
+        """
+        top, bottom = self.unit(target), self.unit(source)
+        if not bottom:
+            return top
+        return f"{top or '1'}/{bottom}" + (f"^{power}" if power != 1 else "")
+
     def quantity(self, name: str) -> str | None:
         """Return what a variable's unit measures (``"force"`` for N), if the unit says."""
         return _QUANTITY.get(self.unit(name))
