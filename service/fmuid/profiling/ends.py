@@ -11,9 +11,14 @@ from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.points import WalkPoint
+from fmuid.profiling.quasi import Secant, quasi_refit
 
 #: Most re-fits spent locating one crossing.
 MAX_REFITS = 12
+#: A re-fit at a guess of a crossing stops when its next Gauss-Newton step would lower chi2 by
+#: less than this fraction of the threshold (moving the end by about half that fraction of its
+#: half-width, well inside ``end_tolerance``).
+END_TOL = 1e-5
 
 
 @dataclass(frozen=True)
@@ -153,6 +158,7 @@ def _root(
     best = b
     guess = _secant(za, fa, zb, fb)
     refits, last_side = 0, 0
+    newton = not options.polish
     while refits < MAX_REFITS:
         if abs(zb - za) <= tolerance * abs(guess - z_hat_i):
             return End(guess, best, refits)
@@ -160,7 +166,7 @@ def _root(
         start = (1.0 - w) * a.z + w * b.z
         start[index] = guess
         try:
-            z, chi2, _ = refine(problem, start, free=free, options=options)
+            z, chi2, newton = _refit(problem, start, free, options, END_TOL * threshold, newton)
         except FmuidError:
             return End(guess, best, refits + 1, settled=False)
         refits += 1
@@ -183,6 +189,31 @@ def _root(
             return End(nxt, best, refits)
         guess = nxt
     return End(guess, best, refits, settled=False)
+
+
+def _refit(
+    problem: Problem,
+    start: np.ndarray,
+    free: np.ndarray,
+    options: FitOptions,
+    tolerance: float,
+    newton: bool,
+) -> tuple[np.ndarray, float, bool]:
+    """Re-fit at a guess of the crossing: Gauss-Newton on a fresh Jacobian, else trust-region.
+
+    The Gauss-Newton steps (:func:`fmuid.profiling.quasi.quasi_refit`, when ``newton``) stop
+    when the next would lower chi2 by less than ``tolerance``; where they do not settle,
+    ``refine`` runs from ``start``. Returns the point, its chi2 and whether Gauss-Newton is
+    worth trying at the next guess of this crossing (not after it failed here, nor for
+    polished re-fits: a non-smooth objective, where finite differences mislead).
+    """
+    if newton:
+        secant = Secant(np.zeros((problem.n_data, problem.n_free)), start)
+        cheap = quasi_refit(problem, start, free, secant, tolerance, options.diff_step, fresh=True)
+        if cheap is not None and cheap[2]:
+            return cheap[0], cheap[1], True
+    z, chi2, _ = refine(problem, start, free=free, options=options)
+    return z, chi2, False
 
 
 def _secant(za: float, fa: float, zb: float, fb: float) -> float:
