@@ -126,6 +126,7 @@ def settle_branch(
     known: list[WalkPoint] = []
     fresh = True
     checks = options.checks
+    tangent = None if jacobian is None else path_tangent(jacobian, index)
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
             break
@@ -141,6 +142,7 @@ def settle_branch(
                 options.refit,
                 options.end_tolerance,
                 outermost=options.overshoot > 0,
+                tangent=tangent,
             )
             for kind, t in thresholds.items()
         }
@@ -153,7 +155,7 @@ def settle_branch(
             thresholds,
             sd_z,
             thorough or checks.always,
-            None if jacobian is None else path_tangent(jacobian, index),
+            tangent,
         )
         counts.jumps = max(counts.jumps, sum(1 for *_, why in sites if why != "end"))
         lower = None

@@ -10,6 +10,7 @@ import numpy as np
 from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
+from fmuid.profiling.checks import switches
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.quasi import Secant, quasi_refit
 
@@ -91,13 +92,18 @@ def locate(
     options: FitOptions,
     tolerance: float = 1e-3,
     outermost: bool = False,
+    tangent: np.ndarray | None = None,
 ) -> End:
     """Locate the crossing of ``chi2_hat + threshold`` on one side by root-finding on re-fits.
 
     The function whose root is sought is the signed root ``sqrt(chi2(z) - chi2_hat)`` minus
     ``sqrt(threshold)``, where ``chi2(z)`` re-fits the other parameters with parameter
-    ``index`` fixed at ``z`` (warm-started on the straight line between the bracketing
-    points). Regula falsi with the Illinois modification keeps the bracket; the first guess is
+    ``index`` fixed at ``z``, warm-started on the straight line between the bracketing
+    points. When the walk switched valley between them
+    (:func:`fmuid.profiling.checks.switches`), a start on that line mixes two valleys and its
+    re-fit may land in the higher one: ``chi2(z)`` is then the lower of the re-fits from each
+    bracketing point's valley (the profile is the lower envelope of the valleys). Regula falsi
+    with the Illinois modification keeps the bracket; the first guess is
     the signed-root interpolation, exact for a parabolic profile, and every guess is confirmed
     by a re-fit. It stops when the next correction is below ``tolerance`` times the
     half-width ``|z - z_hat|``.
@@ -121,6 +127,9 @@ def locate(
     outermost
         Locate the outermost crossing of the walked points rather than the first (a non-smooth
         objective); ``beyond`` tells whether the last good point is back under the threshold.
+    tangent
+        The path's Gauss-Newton direction at the estimate (:func:`fmuid.profiling.walk.
+        path_tangent`): the switch test of the first step.
 
     Returns
     -------
@@ -131,7 +140,9 @@ def locate(
     pair = bracket(side, index, chi2_hat, threshold, outermost)
     if pair is None:
         return End(None)
-    end = _root(problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance)
+    moved = switches(side, index, problem.z_lower, problem.z_upper, tangent)
+    apart = any(side[k] is pair[1] for k in moved)
+    end = _root(problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance, apart)
     ok = [p for p in side if p.error is None and np.isfinite(p.chi2)]
     if outermost and ok[-1].chi2 - chi2_hat < threshold:
         return replace(end, beyond=True)
@@ -147,8 +158,14 @@ def _root(
     pair: tuple[WalkPoint, WalkPoint],
     options: FitOptions,
     tolerance: float,
+    apart: bool = False,
 ) -> End:
-    """Regula falsi (Illinois) on re-fits inside the bracketing ``pair`` (see :func:`locate`)."""
+    """Regula falsi (Illinois) on re-fits inside the bracketing ``pair`` (see :func:`locate`).
+
+    ``apart``: the pair lies in two valleys; each guess is re-fitted from both, until the
+    lower re-fit replaces the bracket's point of the other valley (the bracket is then one
+    valley's). ``MAX_REFITS`` bounds the guesses.
+    """
     a, b = pair
     target = np.sqrt(threshold)
     free = np.ones(problem.n_free, bool)
@@ -157,23 +174,32 @@ def _root(
     fa, fb = rise_root(a.chi2, chi2_hat) - target, rise_root(b.chi2, chi2_hat) - target
     best = b
     guess = _secant(za, fa, zb, fb)
-    refits, last_side = 0, 0
+    refits, guesses, last_side = 0, 0, 0
     newton = not options.polish
-    while refits < MAX_REFITS:
+    while guesses < MAX_REFITS:
         if abs(zb - za) <= tolerance * abs(guess - z_hat_i):
             return End(guess, best, refits)
         w = (guess - za) / (zb - za)
-        start = (1.0 - w) * a.z + w * b.z
-        start[index] = guess
-        try:
-            z, chi2, newton = _refit(problem, start, free, options, END_TOL * threshold, newton)
-        except FmuidError:
-            return End(guess, best, refits + 1, settled=False)
-        refits += 1
+        starts = [a.z.copy(), b.z.copy()] if apart else [(1.0 - w) * a.z + w * b.z]
+        fits = []
+        for origin, start in enumerate(starts):
+            start[index] = guess
+            try:
+                fits.append(
+                    (*_refit(problem, start, free, options, END_TOL * threshold, newton), origin)
+                )
+            except FmuidError:
+                continue
+        refits += len(starts)
+        guesses += 1
+        if not fits:
+            return End(guess, best, refits, settled=False)
+        z, chi2, newton, origin = min(fits, key=lambda f: f[1])
         point = WalkPoint(z, chi2)
         fg = rise_root(chi2, chi2_hat) - target
         if abs(fg) <= abs(rise_root(best.chi2, chi2_hat) - target):
             best = point
+        apart = apart and origin == (0 if fg < 0 else 1)
         if fg < 0:
             a, za, fa = point, guess, fg
             if last_side < 0:
