@@ -137,16 +137,50 @@ def locate(
         With ``z=None`` when ``side`` does not straddle the threshold.
 
     """
-    pair = bracket(side, index, chi2_hat, threshold, outermost)
-    if pair is None:
-        return End(None)
+    side = list(side)
+    confirms = 0
     moved = switches(side, index, problem.z_lower, problem.z_upper, tangent)
-    apart = any(side[k] is pair[1] for k in moved)
-    end = _root(problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance, apart)
+    while True:
+        pair = bracket(side, index, chi2_hat, threshold, outermost)
+        if pair is None:
+            return End(None, refits=confirms)
+        apart = any(side[k] is pair[1] for k in moved)
+        end, above = _root(
+            problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance, apart
+        )
+        end = replace(end, refits=end.refits + confirms)
+        if above or not pair[1].carried:
+            break
+        confirmed = confirm(problem, index, pair[1], options, threshold)
+        confirms += 1
+        if confirmed is not None and confirmed.chi2 - chi2_hat >= threshold:
+            break
+        k = next(k for k, p in enumerate(side) if p is pair[1])
+        side[k] = confirmed or WalkPoint(pair[1].z, float("nan"), "the confirming re-fit failed")
     ok = [p for p in side if p.error is None and np.isfinite(p.chi2)]
     if outermost and ok[-1].chi2 - chi2_hat < threshold:
         return replace(end, beyond=True)
     return end
+
+
+def confirm(
+    problem: Problem, index: int, point: WalkPoint, options: FitOptions, threshold: float
+) -> WalkPoint | None:
+    """Re-fit a point afresh from itself (:func:`fresh_refit`): the lower of both points.
+
+    For a point whose chi2 came from the Jacobian carried along the walk (``carried``), before
+    a rise it reports over ``threshold`` ends a walk or brackets an end. ``None`` when the
+    re-fit fails.
+    """
+    free = np.ones(problem.n_free, bool)
+    free[index] = False
+    try:
+        z, chi2, _ = fresh_refit(
+            problem, point.z, free, options, END_TOL * threshold, not options.polish
+        )
+    except FmuidError:
+        return None
+    return WalkPoint(z, chi2) if chi2 < point.chi2 else replace(point, carried=False)
 
 
 def _root(
@@ -159,12 +193,13 @@ def _root(
     options: FitOptions,
     tolerance: float,
     apart: bool = False,
-) -> End:
+) -> tuple[End, bool]:
     """Regula falsi (Illinois) on re-fits inside the bracketing ``pair`` (see :func:`locate`).
 
     ``apart``: the pair lies in two valleys; each guess is re-fitted from both, until the
     lower re-fit replaces the bracket's point of the other valley (the bracket is then one
-    valley's). ``MAX_REFITS`` bounds the guesses.
+    valley's). ``MAX_REFITS`` bounds the guesses. Returns the end and whether a re-fit read
+    the profile at or over the threshold (otherwise the crossing rests on ``pair[1]`` alone).
     """
     a, b = pair
     target = np.sqrt(threshold)
@@ -175,30 +210,33 @@ def _root(
     best = b
     guess = _secant(za, fa, zb, fb)
     refits, guesses, last_side = 0, 0, 0
+    above = False
     newton = not options.polish
     while guesses < MAX_REFITS:
         if abs(zb - za) <= tolerance * abs(guess - z_hat_i):
-            return End(guess, best, refits)
+            return End(guess, best, refits), above
         w = (guess - za) / (zb - za)
         starts = [a.z.copy(), b.z.copy()] if apart else [(1.0 - w) * a.z + w * b.z]
         fits = []
         for origin, start in enumerate(starts):
             start[index] = guess
             try:
-                fits.append(
-                    (*_refit(problem, start, free, options, END_TOL * threshold, newton), origin)
+                z, chi2, more = fresh_refit(
+                    problem, start, free, options, END_TOL * threshold, newton
                 )
             except FmuidError:
                 continue
+            fits.append((chi2, origin, z, more))
         refits += len(starts)
         guesses += 1
         if not fits:
-            return End(guess, best, refits, settled=False)
-        z, chi2, newton, origin = min(fits, key=lambda f: f[1])
+            return End(guess, best, refits, settled=False), above
+        chi2, origin, z, newton = min(fits, key=lambda f: f[0])
         point = WalkPoint(z, chi2)
         fg = rise_root(chi2, chi2_hat) - target
         if abs(fg) <= abs(rise_root(best.chi2, chi2_hat) - target):
             best = point
+        above = above or fg >= 0
         apart = apart and origin == (0 if fg < 0 else 1)
         if fg < 0:
             a, za, fa = point, guess, fg
@@ -212,12 +250,12 @@ def _root(
             last_side = 1
         nxt = _secant(za, fa, zb, fb)
         if abs(nxt - guess) <= tolerance * abs(nxt - z_hat_i):
-            return End(nxt, best, refits)
+            return End(nxt, best, refits), above
         guess = nxt
-    return End(guess, best, refits, settled=False)
+    return End(guess, best, refits, settled=False), above
 
 
-def _refit(
+def fresh_refit(
     problem: Problem,
     start: np.ndarray,
     free: np.ndarray,

@@ -12,7 +12,7 @@ from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.checks import CheckOptions
-from fmuid.profiling.ends import rise_root
+from fmuid.profiling.ends import confirm, rise_root
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.quasi import Secant, quasi_refit
 
@@ -114,7 +114,8 @@ def walk(
     fewer; linear without ``jacobian``). Given ``jacobian``, the re-fits are Gauss-Newton steps
     on that Jacobian carried along the walk (:func:`fmuid.profiling.quasi.quasi_refit`; a full
     re-fit where they do not settle, and for the rest of the walk after ``MAX_MISSES`` in a
-    row). The step aims at a
+    row; a point they put over the stop threshold is re-fitted afresh before it ends the walk:
+    :func:`fmuid.profiling.ends.confirm`). The step aims at a
     rise of the signed root ``sqrt(chi2 - chi2_hat)`` by ``sqrt(rise_per_step * threshold)``,
     starting from ``step`` and adapted from the rise actually seen (a parabolic profile is
     walked in equal steps); a step that overshoots is retried shorter.
@@ -165,7 +166,8 @@ def walk(
     misses = 0
     if jacobian is not None and options.quasi_tol > 0 and not options.refit.polish:
         secant = Secant(-np.array(jacobian, dtype=float), path[-1].z.copy())
-    if last_ok.chi2 - chi2_hat > threshold * (1.0 + options.margin) and options.overshoot <= 0:
+    stop = threshold * (1.0 + options.margin)
+    if last_ok.chi2 - chi2_hat > stop and options.overshoot <= 0:
         return points, None
     while len(points) < options.max_points:
         zi = last_ok.z[index] + direction * step
@@ -180,10 +182,16 @@ def walk(
             cheap = quasi_refit(
                 problem, guess, free, secant, options.quasi_tol * threshold, options.refit.diff_step
             )
+        carried = False
         try:
             if cheap is not None and cheap[2]:
                 z, chi2 = cheap[0], cheap[1]
                 misses = 0
+                carried = True
+                if chi2 - chi2_hat > stop:  # a rise read on the carried Jacobian: confirm it
+                    sure = confirm(problem, index, WalkPoint(z, chi2), options.refit, threshold)
+                    if sure is not None:
+                        z, chi2, carried = sure.z, sure.chi2, False
             else:
                 misses += 1
                 if misses >= MAX_MISSES:
@@ -194,7 +202,7 @@ def walk(
             z, chi2 = guess, float("nan")
             points.append(WalkPoint(guess, chi2, str(exc)))
         else:
-            points.append(WalkPoint(z, chi2))
+            points.append(WalkPoint(z, chi2, carried=carried))
         if on_point:
             on_point(len(points))
         point = points[-1]
@@ -221,7 +229,7 @@ def walk(
         distance = abs(zi - path[0].z[index])
         if at_edge or (reach is not None and distance >= reach * (1 - 1e-9)):
             break
-        if reach is None and point.chi2 - chi2_hat > threshold * (1.0 + options.margin):
+        if reach is None and point.chi2 - chi2_hat > stop:
             if options.overshoot <= 0:
                 break
             reach = (1.0 + options.overshoot) * distance

@@ -1,4 +1,4 @@
-"""A CI end bracketed across a switch of valley, against scipy multi-start re-fits."""
+"""CI ends bracketed across a switch of valley or by a stale re-fit, against scipy re-fits."""
 
 import sys
 from pathlib import Path
@@ -66,3 +66,37 @@ def test_an_end_bracketed_across_a_valley_switch_is_the_lower_valleys_crossing()
     assert abs(exact - 1.0 / 3.0) < 1e-3
     assert end.settled
     assert abs(end.z - exact) < 0.01 * exact
+
+
+def test_a_rise_read_on_a_stale_jacobian_is_confirmed_before_it_brackets_an_end():
+    """A walk point whose carried-Jacobian re-fit read chi2 too high (1.3 where the profile is
+    0.6, under the threshold 1) would bracket the end inside the profile; re-fitted afresh it
+    does not, and the end is the crossing between it and the next point."""
+    t = np.linspace(0.0, 1.0, 30)
+    y = 1.5 * np.exp(-0.7 * t) + 0.3 * t + 0.05 * np.sin(17.0 * t)
+    problem = SimpleNamespace(
+        residuals=lambda z: (z[0] * np.exp(-z[1] * t) + z[2] * t - y) / 0.05,
+        z_lower=np.full(3, -5.0),
+        z_upper=np.full(3, 5.0),
+        n_free=3,
+        n_data=30,
+    )
+    full = least_squares(problem.residuals, [1.5, 0.7, 0.3], xtol=1e-14, ftol=1e-14)
+    estimate = WalkPoint(full.x, 2.0 * full.cost)
+    ref = ReferenceProfile(problem, 0, full.x)
+    exact = ref.crossing(estimate.chi2, 1.0, full.x[0] + 0.05)
+
+    def point(z0: float, chi2: float | None = None, carried: bool = False) -> WalkPoint:
+        res = least_squares(lambda x: problem.residuals(np.r_[z0, x]), full.x[1:], xtol=1e-14)
+        true = WalkPoint(np.r_[z0, res.x], 2.0 * res.cost)
+        return WalkPoint(true.z, true.chi2 if chi2 is None else chi2, carried=carried)
+
+    inner = full.x[0] + 0.8 * (exact - full.x[0])
+    stale = point(inner, estimate.chi2 + 1.3, carried=True)
+    assert point(inner).chi2 - estimate.chi2 < 0.7
+    outer = point(full.x[0] + 1.6 * (exact - full.x[0]))
+    end = locate(
+        problem, 0, estimate.chi2, float(full.x[0]), 1.0, [estimate, stale, outer], FitOptions()
+    )
+    assert end.settled
+    assert abs(end.z - exact) < 0.01 * abs(exact - full.x[0])
