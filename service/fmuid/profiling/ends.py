@@ -20,6 +20,9 @@ MAX_REFITS = 12
 #: less than this fraction of the threshold (moving the end by about half that fraction of its
 #: half-width, well inside ``end_tolerance``).
 END_TOL = 1e-5
+#: A walk point's confirming re-fit stops when its next Gauss-Newton step would lower chi2 by
+#: less than this fraction of the threshold (the walk's own tolerance: it only decides a side).
+CONFIRM_TOL = 2e-4
 
 
 @dataclass(frozen=True)
@@ -164,19 +167,25 @@ def locate(
 
 
 def confirm(
-    problem: Problem, index: int, point: WalkPoint, options: FitOptions, threshold: float
+    problem: Problem,
+    index: int,
+    point: WalkPoint,
+    options: FitOptions,
+    threshold: float,
+    secant: Secant | None = None,
 ) -> WalkPoint | None:
     """Re-fit a point afresh from itself (:func:`fresh_refit`): the lower of both points.
 
     For a point whose chi2 came from the Jacobian carried along the walk (``carried``), before
-    a rise it reports over ``threshold`` ends a walk or brackets an end. ``None`` when the
-    re-fit fails.
+    a rise it reports over ``threshold`` ends a walk or brackets an end: Gauss-Newton stops
+    when its next step would lower chi2 by less than ``CONFIRM_TOL`` of the threshold (a walk
+    passes its carried ``secant``, renewed here). ``None`` when the re-fit fails.
     """
     free = np.ones(problem.n_free, bool)
     free[index] = False
     try:
         z, chi2, _ = fresh_refit(
-            problem, point.z, free, options, END_TOL * threshold, not options.polish
+            problem, point.z, free, options, CONFIRM_TOL * threshold, not options.polish, secant
         )
     except FmuidError:
         return None
@@ -262,6 +271,7 @@ def fresh_refit(
     options: FitOptions,
     tolerance: float,
     newton: bool,
+    secant: Secant | None = None,
 ) -> tuple[np.ndarray, float, bool]:
     """Re-fit at a guess of the crossing: Gauss-Newton on a fresh Jacobian, else trust-region.
 
@@ -269,10 +279,12 @@ def fresh_refit(
     when the next would lower chi2 by less than ``tolerance``; where they do not settle,
     ``refine`` runs from ``start``. Returns the point, its chi2 and whether Gauss-Newton is
     worth trying at the next guess of this crossing (not after it failed here, nor for
-    polished re-fits: a non-smooth objective, where finite differences mislead).
+    polished re-fits: a non-smooth objective, where finite differences mislead). ``secant``:
+    the Jacobian carried along a walk, renewed here (a new one by default).
     """
     if newton:
-        secant = Secant(np.zeros((problem.n_data, problem.n_free)), start)
+        if secant is None:
+            secant = Secant(np.zeros((problem.n_data, problem.n_free)), start)
         cheap = quasi_refit(problem, start, free, secant, tolerance, options.diff_step, fresh=True)
         if cheap is not None and cheap[2]:
             return cheap[0], cheap[1], True

@@ -78,6 +78,7 @@ def quasi_refit(
     ``diff_step``) once (``fresh``: at ``guess``, before the first step, and not again). It
     stops when the chi2 decrease the next step predicts is below ``tolerance``, and gives up
     when a step on a renewed Jacobian achieves less than ``POOR`` of its predicted decrease.
+    A ``guess`` equal to the secant's last point reuses its residuals.
 
     Returns
     -------
@@ -90,8 +91,11 @@ def quasi_refit(
     lo, hi = problem.z_lower, problem.z_upper
     z = np.clip(np.asarray(guess, dtype=float), lo, hi)
     try:
-        r = problem.residuals(z)
-        secant.update(z, r)
+        if secant.r is not None and np.array_equal(z, secant.z):
+            r = secant.r.copy()
+        else:
+            r = problem.residuals(z)
+            secant.update(z, r)
         chi2 = float(r @ r)
         renewed = fresh
         if fresh:

@@ -189,7 +189,9 @@ def walk(
                 misses = 0
                 carried = True
                 if chi2 - chi2_hat > stop:  # a rise read on the carried Jacobian: confirm it
-                    sure = confirm(problem, index, WalkPoint(z, chi2), options.refit, threshold)
+                    sure = confirm(
+                        problem, index, WalkPoint(z, chi2), options.refit, threshold, secant
+                    )
                     if sure is not None:
                         z, chi2, carried = sure.z, sure.chi2, False
             else:
