@@ -239,7 +239,7 @@ def main() -> None:
     parser.add_argument("--defaults", action="store_true", help="also pyPESTO's defaults")
     args = parser.parse_args()
     bench = _load("bench_profile", HERE / "profile.py")
-    reference = _load("reference", HERE.parent / "tests" / "profiles" / "reference.py")
+    reference = _load("reference", HERE.parent / "tests" / "profiling" / "reference.py")
     fmu = builtin_fmu("tractor_implement")
     summary = [run_case(bench, reference, fmu, label, args) for label in args.cases]
     print(

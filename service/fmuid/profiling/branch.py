@@ -9,15 +9,17 @@ import numpy as np
 
 from fmuid.engine.count import counting
 from fmuid.estimation.problem import Problem
-from fmuid.profiling.checks import basins, diverse_starts, jumps, refit_from
+from fmuid.profiling.checks import (
+    basins,
+    diverse_starts,
+    jumps,
+    refit_from,
+    switches,
+)
 from fmuid.profiling.ends import End, locate
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ProfileQuality
-from fmuid.profiling.walk import WalkOptions, first_step, walk
-
-#: An end whose half-width differs from the quadratic (Fisher) one by more than this fraction
-#: is non-parabolic and gets diverse-start checks.
-NON_PARABOLIC = 0.3
+from fmuid.profiling.walk import WalkOptions, first_step, path_tangent, walk
 
 
 @dataclass(frozen=True)
@@ -60,6 +62,7 @@ def settle_branch(
     thorough: bool = False,
     seed: int = 0,
     on_point: Callable[[int], None] | None = None,
+    jacobian: np.ndarray | None = None,
 ) -> BranchResult:
     """Walk one branch, locate its CI ends exactly and check that it follows the lowest valley.
 
@@ -95,6 +98,8 @@ def settle_branch(
         Seed of the diverse starts.
     on_point
         Called with the number of walk points done after each point.
+    jacobian
+        Weighted residual Jacobian at the optimum: the walk's warm starts and cheap re-fits.
 
     Returns
     -------
@@ -114,12 +119,14 @@ def settle_branch(
         first_step(sd_z, thr, span, options),
         options,
         on_point,
+        jacobian,
     )
     counts = _Counts()
     ends: dict[str, End] = {}
     known: list[WalkPoint] = []
     fresh = True
     checks = options.checks
+    tangent = None if jacobian is None else path_tangent(jacobian, index)
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
             break
@@ -135,15 +142,24 @@ def settle_branch(
                 options.refit,
                 options.end_tolerance,
                 outermost=options.overshoot > 0,
+                tangent=tangent,
             )
             for kind, t in thresholds.items()
         }
         sites = _sites(
-            problem, index, side, ends, chi2_hat, thresholds, sd_z, thorough or checks.always
+            problem,
+            index,
+            side,
+            ends,
+            chi2_hat,
+            thresholds,
+            sd_z,
+            thorough or checks.always,
+            tangent,
         )
-        counts.jumps = max(counts.jumps, sum(1 for _, _, why in sites if why == "jump"))
+        counts.jumps = max(counts.jumps, sum(1 for *_, why in sites if why != "end"))
         lower = None
-        for site, diverse, _ in sites:
+        for site, diverse, near, _ in sites:
             others: list[np.ndarray] = []
             if diverse:
                 others = (
@@ -152,18 +168,18 @@ def settle_branch(
                     else [p.z for p in known]
                 )
                 fresh = False
-            if not valleys and not others:
+            if not valleys and not others and not near:
                 continue
             zi = float(site.z[index])
             with counting() as checked:
-                from_valleys = refit_from(problem, index, zi, list(valleys), checks.refit)
+                from_valleys = refit_from(problem, index, zi, [*valleys, *near], checks.refit)
                 from_others = refit_from(problem, index, zi, others, checks.refit)
                 if others:
                     known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
             found = from_valleys + from_others
             counts.check_sims += checked.simulations
             counts.checks += 1
-            counts.starts += len(valleys) + len(others)
+            counts.starts += len(valleys) + len(others) + len(near)
             if not found:
                 continue
             best = min(found, key=lambda p: p.chi2)
@@ -211,21 +227,28 @@ def _sites(
     thresholds: dict[str, float],
     sd_z: float,
     thorough: bool,
-) -> list[tuple[WalkPoint, bool, str]]:
-    """Points to check: ``(point, with diverse starts, why)``, the outermost end first."""
+    tangent: np.ndarray | None,
+) -> list[tuple[WalkPoint, bool, list[np.ndarray], str]]:
+    """Points to check: ``(point, with diverse starts, neighbours' starts, why)``.
+
+    First the point before each switch of valley (:func:`fmuid.profiling.checks.switches`),
+    re-fitted from the valley the walk switched to (one re-fit from a nearby minimum; the point
+    after it needs none: its re-fit started from the old valley and descended out of it); then
+    the outermost end, the other end and the jumps of the chi2 path.
+    """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
-    out: list[tuple[WalkPoint, bool, str]] = []
-    z_hat_i = float(side[0].z[index])
+    out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []
+    for k in switches(side, index, problem.z_lower, problem.z_upper, tangent):
+        before = max(j for j in range(k) if side[j].ok)
+        out.append((side[before], False, [side[k].z], "switch"))
     for kind in ("simultaneous", "pointwise"):
         end = ends.get(kind)
         if kind not in thresholds or end is None or end.point is None or end.z is None:
             continue
-        half = abs(end.z - z_hat_i)
-        quad = np.sqrt(thresholds[kind]) * sd_z
-        odd = not np.isfinite(quad) or abs(half / quad - 1.0) > NON_PARABOLIC
         on_bound = bool(problem.space.at_bound(end.point.z, skip=index))
-        out.append((end.point, thorough or odd or on_bound or bool(found), kind))
-    out.extend((side[k], True, "jump") for k in found)
+        diverse = thorough or not np.isfinite(sd_z) or on_bound or bool(found)
+        out.append((end.point, diverse, [], "end"))
+    out.extend((side[k], True, [], "jump") for k in found)
     return out
 
 
@@ -278,6 +301,7 @@ class BranchTask:
     valleys: tuple[np.ndarray, ...] = ()
     thorough: bool = False
     seed: int = 0
+    jacobian: np.ndarray | None = None
 
     def execute(self, report: Callable[[int], None]) -> BranchResult:
         """Walk and settle the branch, calling ``report`` with the walk points done."""
@@ -297,4 +321,5 @@ class BranchTask:
             thorough=self.thorough,
             seed=self.seed,
             on_point=report,
+            jacobian=self.jacobian,
         )

@@ -159,3 +159,56 @@ def jumps(side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: flo
                 out.append(k1)
         slope_prev = slope if risen else None
     return out
+
+
+#: A step along which the other parameters' rate of change (per unit of the profiled one, in
+#: fractions of their ranges) changes by more than this multiple of the previous step's rate
+#: is a switch of valley...
+SWITCH_RATIO = 1.0
+#: ...when the change is also at least this large (a range per range: slow drifts are smooth).
+SWITCH_FLOOR = 0.5
+
+
+def switches(
+    side: Sequence[WalkPoint],
+    index: int,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    tangent: np.ndarray | None = None,
+) -> list[int]:
+    """Positions in ``side`` where the re-fit of the other parameters jumped to another valley.
+
+    Along one valley the other parameters move smoothly with the profiled one; their rate of
+    change per step (span-normalised) changes by a small fraction of itself from one step to
+    the next. A change larger than ``SWITCH_RATIO`` times the previous rate and than
+    ``SWITCH_FLOOR`` marks the point after it: the walk may have left the valley it followed
+    there (or joined a lower one), whatever its chi2 path looks like. Parameters on a bound
+    (``lower``, ``upper``: fitted coordinates) at either step are left out: their rate stops.
+    The first step is compared with the path's ``tangent`` at ``side[0]`` when given.
+    """
+    span = upper - lower
+    ok = [(k, p) for k, p in enumerate(side) if p.ok]
+    out: list[int] = []
+    rate_prev: np.ndarray | None = None
+    free_prev = np.ones(len(span), bool)
+    for (_, p0), (k1, p1) in zip(ok, ok[1:]):
+        dz = (p1.z - p0.z) / span
+        if dz[index] == 0:
+            continue
+        if rate_prev is None and tangent is not None and p0 is side[0]:
+            rate_prev = tangent / span * span[index] * np.sign(dz[index])
+        inside = np.ones(len(span), bool)
+        inside[index] = False
+        for p in (p0, p1):
+            inside &= (p.z > lower + 1e-6 * span) & (p.z < upper - 1e-6 * span)
+        rate = dz / abs(dz[index])
+        if rate_prev is not None:
+            keep = inside & free_prev
+            if keep.any():
+                change = float(np.max(np.abs(rate - rate_prev)[keep]))
+                if change > max(
+                    SWITCH_FLOOR, SWITCH_RATIO * float(np.max(np.abs(rate_prev[keep])))
+                ):
+                    out.append(k1)
+        rate_prev, free_prev = rate, inside
+    return out

@@ -222,11 +222,12 @@ def _walk_all(
             pointwise=thr["pointwise"],
             valleys=tuple(valleys),
             seed=seed,
+            jacobian=fit.jacobian,
         )
         for n in names
         for d in (-1, 1)
     ]
-    expected = int(np.ceil((1.0 + options.margin) / options.rise_per_step)) + 1
+    expected = int(np.ceil(np.sqrt((1.0 + options.margin) / options.rise_per_step))) + 1
     done: dict[tuple[int, int], int] = {}
 
     def on_point(k: int, n: int) -> None:

@@ -12,7 +12,9 @@ from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.checks import CheckOptions
+from fmuid.profiling.ends import confirm, rise_root
 from fmuid.profiling.points import WalkPoint
+from fmuid.profiling.quasi import Secant, quasi_refit
 
 log = logging.getLogger(__name__)
 
@@ -24,13 +26,16 @@ class WalkOptions:
     Attributes
     ----------
     rise_per_step
-        Target chi2 rise per step, as a fraction of the simultaneous threshold.
+        The first step aims at a chi2 rise of this fraction of the simultaneous threshold;
+        every later step at the same rise of the signed root ``sqrt(chi2 - chi2_hat)`` (linear
+        in the parameter for a parabolic profile, so the steps stay equal and about
+        ``1 / sqrt(rise_per_step)`` points reach the threshold).
     margin
         Walk on until the profile exceeds the simultaneous threshold times ``1 + margin``.
     min_step, max_step
         Step limits, as fractions of the parameter's range in fitted coordinates.
     max_rise
-        A step whose chi2 rise exceeds this multiple of the target is retried shorter.
+        A step whose signed-root rise exceeds this multiple of the target is retried shorter.
     max_points
         Cap on points per branch.
     max_failures
@@ -43,6 +48,11 @@ class WalkOptions:
         CI ends are located to this fraction of their half-width.
     checks
         Settings of the right-valley checks at the ends and jumps.
+    quasi_tol
+        The walk's points are re-fitted by Gauss-Newton steps on a carried Jacobian
+        (:mod:`fmuid.profiling.quasi`) until the next step would lower chi2 by less than this
+        fraction of the simultaneous threshold (0, or polished re-fits for a non-smooth
+        objective: full re-fits at every point).
     overshoot
         Past the first point over the simultaneous threshold, walk on until the distance from
         the estimate is ``1 + overshoot`` times that point's, in ``OVERSHOOT_STEPS`` equal steps
@@ -67,8 +77,12 @@ class WalkOptions:
     end_tolerance: float = 1e-3
     checks: CheckOptions = field(default_factory=CheckOptions)
     overshoot: float = 0.0
+    quasi_tol: float = 2e-4
 
 
+#: Consecutive points where the Gauss-Newton re-fit did not settle after which the walk
+#: re-fits by trust region only (a strongly nonlinear profile).
+MAX_MISSES = 2
 #: Points walked past the first crossing when ``overshoot`` is set.
 OVERSHOOT_STEPS = 6
 
@@ -90,13 +104,21 @@ def walk(
     step: float,
     options: WalkOptions = WalkOptions(),
     on_point: Callable[[int], None] | None = None,
+    jacobian: np.ndarray | None = None,
 ) -> tuple[list[WalkPoint], WalkPoint | None]:
     """Walk parameter ``index`` outwards in ``direction`` (+1 or -1) from the end of ``path``.
 
     At each point the profiled parameter is fixed and the others are re-fitted, warm-started
-    from a linear extrapolation of their path over the last two points. The step aims at a
-    chi2 rise of ``rise_per_step * threshold``, starting from ``step`` and adapted from the
-    rise actually seen; a step that overshoots is retried shorter.
+    from a quadratic extrapolation of their path over the last three points (over two and the
+    path's Gauss-Newton tangent at the optimum, or along that tangent alone, when there are
+    fewer; linear without ``jacobian``). Given ``jacobian``, the re-fits are Gauss-Newton steps
+    on that Jacobian carried along the walk (:func:`fmuid.profiling.quasi.quasi_refit`; a full
+    re-fit where they do not settle, and for the rest of the walk after ``MAX_MISSES`` in a
+    row; a point they put over the stop threshold is re-fitted afresh before it ends the walk:
+    :func:`fmuid.profiling.ends.confirm`). The step aims at a
+    rise of the signed root ``sqrt(chi2 - chi2_hat)`` by ``sqrt(rise_per_step * threshold)``,
+    starting from ``step`` and adapted from the rise actually seen (a parabolic profile is
+    walked in equal steps); a step that overshoots is retried shorter.
 
     Parameters
     ----------
@@ -116,6 +138,10 @@ def walk(
         Step settings.
     on_point
         Called with the number of points done after each point.
+    jacobian
+        The fit's Jacobian at ``path[0]``, the optimum (:attr:`FitResult.jacobian`: of the
+        weighted model outputs, the residuals' with the opposite sign; fitted coordinates);
+        ``None``: linear warm starts and full re-fits.
 
     Returns
     -------
@@ -128,14 +154,20 @@ def walk(
     span = hi - lo
     free = np.ones(problem.n_free, bool)
     free[index] = False
-    target = options.rise_per_step * threshold
+    target = float(np.sqrt(options.rise_per_step * threshold))
     path = list(path)
     points: list[WalkPoint] = []
     failures = 0
     retries = 0
     last_ok = path[-1]
     reach: float | None = None
-    if last_ok.chi2 - chi2_hat > threshold * (1.0 + options.margin) and options.overshoot <= 0:
+    tangent = None if jacobian is None or len(path) > 1 else path_tangent(jacobian, index)
+    secant = None
+    misses = 0
+    if jacobian is not None and options.quasi_tol > 0 and not options.refit.polish:
+        secant = Secant(-np.array(jacobian, dtype=float), path[-1].z.copy())
+    stop = threshold * (1.0 + options.margin)
+    if last_ok.chi2 - chi2_hat > stop and options.overshoot <= 0:
         return points, None
     while len(points) < options.max_points:
         zi = last_ok.z[index] + direction * step
@@ -143,15 +175,36 @@ def walk(
         zi = float(np.clip(zi, lo, hi))
         if abs(zi - last_ok.z[index]) < 1e-12 * max(1.0, span):
             break
-        guess = _extrapolate(path, index, zi)
+        guess = _extrapolate(path, index, zi, tangent)
         guess = np.clip(guess, problem.z_lower, problem.z_upper)
+        cheap = None
+        if secant is not None:
+            cheap = quasi_refit(
+                problem, guess, free, secant, options.quasi_tol * threshold, options.refit.diff_step
+            )
+        carried = False
         try:
-            z, chi2, _ = refine(problem, guess, free=free, options=options.refit)
+            if cheap is not None and cheap[2]:
+                z, chi2 = cheap[0], cheap[1]
+                misses = 0
+                carried = True
+                if chi2 - chi2_hat > stop:  # a rise read on the carried Jacobian: confirm it
+                    sure = confirm(
+                        problem, index, WalkPoint(z, chi2), options.refit, threshold, secant
+                    )
+                    if sure is not None:
+                        z, chi2, carried = sure.z, sure.chi2, False
+            else:
+                misses += 1
+                if misses >= MAX_MISSES:
+                    secant = None
+                start = guess if cheap is None else cheap[0]
+                z, chi2, _ = refine(problem, start, free=free, options=options.refit)
         except FmuidError as exc:
             z, chi2 = guess, float("nan")
             points.append(WalkPoint(guess, chi2, str(exc)))
         else:
-            points.append(WalkPoint(z, chi2))
+            points.append(WalkPoint(z, chi2, carried=carried))
         if on_point:
             on_point(len(points))
         point = points[-1]
@@ -165,12 +218,12 @@ def walk(
         failures = 0
         if point.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
             return points, point
-        rise = point.chi2 - last_ok.chi2
+        rise = rise_root(point.chi2, chi2_hat) - rise_root(last_ok.chi2, chi2_hat)
         steep = rise > options.max_rise * target and step > options.min_step * span
         if reach is None and steep and retries < 8:
             points.pop()
             retries += 1
-            step = max(step * max(np.sqrt(target / rise), 0.1), options.min_step * span)
+            step = max(step * max(target / rise, 0.1), options.min_step * span)
             continue
         retries = 0
         path.append(point)
@@ -178,7 +231,7 @@ def walk(
         distance = abs(zi - path[0].z[index])
         if at_edge or (reach is not None and distance >= reach * (1 - 1e-9)):
             break
-        if reach is None and point.chi2 - chi2_hat > threshold * (1.0 + options.margin):
+        if reach is None and point.chi2 - chi2_hat > stop:
             if options.overshoot <= 0:
                 break
             reach = (1.0 + options.overshoot) * distance
@@ -186,7 +239,7 @@ def walk(
             continue
         if reach is not None:
             continue
-        factor = np.sqrt(target / max(rise, 1e-12 * target)) if rise > 0 else 2.0
+        factor = target / max(rise, 1e-12 * target) if rise > 0 else 2.0
         step = float(
             np.clip(
                 step * np.clip(factor, 0.5, 2.0), options.min_step * span, options.max_step * span
@@ -195,14 +248,42 @@ def walk(
     return points, None
 
 
-def _extrapolate(path: list[WalkPoint], index: int, zi: float) -> np.ndarray:
-    """Linear extrapolation of all parameters along the path to ``z[index] = zi``."""
-    last = path[-1].z
-    guess = last.copy()
-    if len(path) >= 2:
-        prev = path[-2].z
-        dz = last[index] - prev[index]
-        if abs(dz) > 0:
-            guess = last + (last - prev) * (zi - last[index]) / dz
+def path_tangent(jacobian: np.ndarray, index: int) -> np.ndarray | None:
+    """Return the Gauss-Newton direction of parameter ``index``'s profile path at an optimum.
+
+    With ``C = (J'J)^-1`` the other parameters move by ``C[:, i] / C[i, i]`` per unit of
+    parameter ``i`` (``None`` when ``C[i, i]`` is not positive and finite).
+    """
+    cov = np.linalg.pinv(jacobian.T @ jacobian, rcond=1e-12)
+    cii = float(cov[index, index])
+    if not np.isfinite(cii) or cii <= 0.0:
+        return None
+    return cov[:, index] / cii
+
+
+def _extrapolate(
+    path: list[WalkPoint], index: int, zi: float, tangent: np.ndarray | None = None
+) -> np.ndarray:
+    """Extrapolate all parameters along the path to ``z[index] = zi`` (see :func:`walk`)."""
+    s = np.array([p.z[index] for p in path[-3:]])
+    zs = [p.z for p in path[-3:]]
+    if len(path) >= 3 and np.min(np.abs(np.diff(s))) > 0:
+        guess = sum(
+            zk * np.prod([(zi - s[m]) / (s[k] - s[m]) for m in range(3) if m != k])
+            for k, zk in enumerate(zs)
+        )
+    elif tangent is not None and len(path) <= 2:
+        d = zi - path[0].z[index]
+        guess = path[0].z + tangent * d
+        if len(path) == 2 and path[1].z[index] != path[0].z[index]:
+            d1 = path[1].z[index] - path[0].z[index]
+            curve = (path[1].z - path[0].z - tangent * d1) / d1**2
+            guess = guess + curve * d**2
+    elif len(path) >= 2 and path[-1].z[index] != path[-2].z[index]:
+        last, prev = path[-1].z, path[-2].z
+        guess = last + (last - prev) * (zi - last[index]) / (last[index] - prev[index])
+    else:
+        guess = path[-1].z.copy()
+    guess = np.array(guess, dtype=float)
     guess[index] = zi
     return guess
