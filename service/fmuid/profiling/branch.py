@@ -11,6 +11,7 @@ from fmuid.engine.count import counting
 from fmuid.estimation.problem import Problem
 from fmuid.profiling.checks import (
     basins,
+    bound_flips,
     diverse_starts,
     jumps,
     refit_from,
@@ -72,9 +73,12 @@ def settle_branch(
     profile is non-parabolic, jumps, has another parameter on a bound, or ``thorough`` is set,
     from diverse starts: seeded Latin-hypercube points at the first such site, and at later
     sites the distinct basins those starts reached (:func:`fmuid.profiling.checks.basins`),
-    moved to the site. A lower chi2 there means the walk followed a higher valley:
-    the stretch towards the estimate is re-walked from the lower valley, the walk goes on
-    outwards from it, and the ends are located again.
+    moved to the site. An end where other parameters sit on a bound is re-fitted once more per
+    such parameter, from the end with it moved to its other bound
+    (:func:`fmuid.profiling.checks.bound_flips`): the valley on the other side of that bound
+    is found by the profile's shape, not by the diverse starts' luck. A lower chi2 there means
+    the walk followed a higher valley: the stretch towards the estimate is re-walked from the
+    lower valley, the walk goes on outwards from it, and the ends are located again.
 
     Parameters
     ----------
@@ -234,7 +238,9 @@ def _sites(
     First the point before each switch of valley (:func:`fmuid.profiling.checks.switches`),
     re-fitted from the valley the walk switched to (one re-fit from a nearby minimum; the point
     after it needs none: its re-fit started from the old valley and descended out of it); then
-    the outermost end, the other end and the jumps of the chi2 path.
+    the outermost end, the other end and the jumps of the chi2 path. An end where other
+    parameters sit on a bound is also re-fitted once per such parameter with it moved to its
+    other bound (:func:`fmuid.profiling.checks.bound_flips`).
     """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
     out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []
@@ -245,9 +251,9 @@ def _sites(
         end = ends.get(kind)
         if kind not in thresholds or end is None or end.point is None or end.z is None:
             continue
-        on_bound = bool(problem.space.at_bound(end.point.z, skip=index))
-        diverse = thorough or not np.isfinite(sd_z) or on_bound or bool(found)
-        out.append((end.point, diverse, [], "end"))
+        flips = bound_flips(problem, end.point.z, index)
+        diverse = thorough or not np.isfinite(sd_z) or bool(flips) or bool(found)
+        out.append((end.point, diverse, flips, "end"))
     out.extend((side[k], True, [], "jump") for k in found)
     return out
 

@@ -11,6 +11,7 @@ from scipy.stats import qmc
 from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, refine
 from fmuid.estimation.problem import Problem
+from fmuid.estimation.space import BOUND_TOLERANCE
 from fmuid.profiling.health import GRID_SIDE
 from fmuid.profiling.points import WalkPoint
 
@@ -90,6 +91,28 @@ def refit_from(
         except FmuidError:
             continue
         out.append(WalkPoint(z, chi2))
+    return out
+
+
+def bound_flips(problem: Problem, z: np.ndarray, index: int) -> list[np.ndarray]:
+    """Return ``z`` with one other parameter on a bound moved to its other bound, per parameter.
+
+    A parameter is on a bound when it lies within ``BOUND_TOLERANCE`` (1e-6) of its span of
+    the bound, in fitted coordinates (the level of :meth:`fmuid.estimation.space.
+    ParameterSpace.at_bound`). A re-fit from ``z`` holds such a parameter there; the valley
+    with the parameter on its other bound is reached only from the other side of the ridge
+    between them, which the diverse starts cross by luck. Parameter ``index`` (the profiled
+    one) is left out; the other parameters stay as in ``z``. Empty when none is on a bound.
+    """
+    lo, hi = problem.z_lower, problem.z_upper
+    tol = BOUND_TOLERANCE * (hi - lo)
+    out = []
+    for k in range(len(lo)):
+        if k == index or lo[k] + tol[k] < z[k] < hi[k] - tol[k]:
+            continue
+        start = np.array(z, dtype=float)
+        start[k] = hi[k] if z[k] <= lo[k] + tol[k] else lo[k]
+        out.append(start)
     return out
 
 
