@@ -115,17 +115,27 @@ def msd_parallel_fmu(built_fmus: dict[str, Path]) -> Path:
     return built_fmus["msd_parallel"]
 
 
-@pytest.fixture(scope="session")
-def first_order_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """``tests/pythonfmu_src/first_order.py`` built by pythonfmu: a second FMI 2.0 exporter."""
+def build_pythonfmu(tmp_path_factory: pytest.TempPathFactory, name: str) -> Path:
+    """Build ``tests/pythonfmu_src/<name>.py`` with pythonfmu (skip where it cannot be built)."""
     pythonfmu = pytest.importorskip(
         "pythonfmu", reason="pythonfmu is not installed (pip install -e '.[dev]')"
     )
     if not pythonfmu.FmuBuilder.has_binary():
         pytest.skip("pythonfmu ships no FMU binary for this platform")
-    source = Path(__file__).parent / "pythonfmu_src" / "first_order.py"
-    out = tmp_path_factory.mktemp("pythonfmu")
-    return Path(pythonfmu.FmuBuilder.build_FMU(source, dest=out))
+    source = Path(__file__).parent / "pythonfmu_src" / f"{name}.py"
+    return Path(pythonfmu.FmuBuilder.build_FMU(source, dest=tmp_path_factory.mktemp(name)))
+
+
+@pytest.fixture(scope="session")
+def first_order_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tests/pythonfmu_src/first_order.py`` built by pythonfmu: a second FMI 2.0 exporter."""
+    return build_pythonfmu(tmp_path_factory, "first_order")
+
+
+@pytest.fixture(scope="session")
+def two_tanks_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tests/pythonfmu_src/two_tanks.py`` built by pythonfmu: initial levels as parameters."""
+    return build_pythonfmu(tmp_path_factory, "two_tanks")
 
 
 @pytest.fixture(scope="session")

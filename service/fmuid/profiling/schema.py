@@ -7,6 +7,7 @@ of the JSON.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import TYPE_CHECKING, Any, Literal, Self
 
 from pydantic import Field
@@ -70,17 +71,9 @@ class QualityOut(Block):
     @classmethod
     def of(cls, obj: ProfileQuality) -> Self:
         """Build it from a :class:`~fmuid.profiling.result.ProfileQuality`."""
-        return cls(
-            checks=obj.checks,
-            starts=obj.starts,
-            jumps=obj.jumps,
-            lower_valleys=obj.lower_valleys,
-            rewalks=obj.rewalks,
-            end_refits=obj.end_refits,
-            unsettled=bool(obj.unsettled),
-            unsettled_reasons=list(obj.unsettled),
-            check_simulations=obj.check_simulations,
-        )
+        fields = dataclasses.asdict(obj)
+        reasons = fields.pop("unsettled")
+        return cls(**fields, unsettled=bool(reasons), unsettled_reasons=list(reasons))
 
 
 class ProfileParameterOut(Block):

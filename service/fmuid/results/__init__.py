@@ -241,16 +241,9 @@ def _point(p: ProfilePointOut) -> ProfilePoint:
 
 
 def _quality(q: QualityOut) -> ProfileQuality:
-    return ProfileQuality(
-        checks=q.checks,
-        starts=q.starts,
-        jumps=q.jumps,
-        lower_valleys=q.lower_valleys,
-        rewalks=q.rewalks,
-        end_refits=q.end_refits,
-        unsettled=tuple(q.unsettled_reasons),
-        check_simulations=q.check_simulations,
-    )
+    fields = q.model_dump(exclude={"unsettled"})
+    reasons = fields.pop("unsettled_reasons")
+    return ProfileQuality(**fields, unsettled=tuple(reasons))
 
 
 def _profile(name: str, p: ProfileParameterOut) -> ParameterProfile:
