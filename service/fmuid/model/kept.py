@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from collections.abc import Callable, Hashable
 from typing import Generic, TypeVar
@@ -19,25 +20,49 @@ def content_key(*arrays: np.ndarray) -> tuple[tuple[int, ...], bytes]:
     return tuple(np.size(a) for a in arrays), digest.digest()
 
 
+MAX_BYTES = 256 * 2**20
+"""Array bytes one cache keeps at most (the newest value is kept whatever its size)."""
+
+
 class Kept(Generic[V]):
-    """The last ``size`` values made, by key; the oldest is dropped first.
+    """The last ``size`` values made, by key, within :data:`MAX_BYTES`; the oldest go first.
 
     A fit simulates the same times and inputs many times; what depends on them alone is made
-    once. Callers keep what they get unchanged (arrays are made read-only by the maker).
+    once. Callers keep what they get unchanged (arrays are made read-only by the maker). The
+    byte bound matters on long records on a fine grid: a 25,000-sample record at 64 steps per
+    sample makes grids of 1.6 million points, and sixteen of them would hold gigabytes in
+    every worker process.
     """
 
-    def __init__(self, size: int) -> None:
+    def __init__(self, size: int, max_bytes: int = MAX_BYTES) -> None:
         self.size = size
-        self._values: dict[Hashable, V] = {}
+        self.max_bytes = max_bytes
+        self._values: dict[Hashable, tuple[V, int]] = {}
 
     def get(self, key: Hashable, make: Callable[[], V]) -> V:
         """Return the value kept for ``key``, made by ``make()`` the first time."""
-        value = self._values.get(key)
-        if value is None:
-            value = self._values[key] = make()
-            if len(self._values) > self.size:
-                self._values.pop(next(iter(self._values)))
+        kept = self._values.get(key)
+        if kept is not None:
+            return kept[0]
+        value = make()
+        self._values[key] = (value, array_bytes(value))
+        while len(self._values) > 1 and (
+            len(self._values) > self.size
+            or sum(b for _, b in self._values.values()) > self.max_bytes
+        ):
+            self._values.pop(next(iter(self._values)))
         return value
+
+
+def array_bytes(value: object) -> int:
+    """Bytes of the arrays in ``value`` (an array, a tuple or list of them, or a dataclass)."""
+    if isinstance(value, np.ndarray):
+        return value.nbytes
+    if isinstance(value, tuple | list):
+        return sum(array_bytes(v) for v in value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return sum(array_bytes(getattr(value, f.name)) for f in dataclasses.fields(value))
+    return 0
 
 
 def read_only(a: np.ndarray) -> np.ndarray:

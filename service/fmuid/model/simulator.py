@@ -30,13 +30,16 @@ from fmuid.model.exchange import RTOL, run_model_exchange
 from fmuid.model.feedback import Feedback, feedback_inputs, fine_times, run_feedback
 from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
+from fmuid.model.kept import MAX_BYTES, array_bytes
 from fmuid.model.native import run_native_feedback
 from fmuid.model.plan import RunPlan, make_plan
 
 logger = logging.getLogger(__name__)
 
 PLAN_CACHE = 32
-"""Run plans kept per simulator (one per experiment of a study, typically)."""
+"""Run plans kept per simulator (one per experiment of a study, typically), within the array
+bytes of :data:`~fmuid.model.kept.MAX_BYTES`: an input effect makes new input arrays at every
+run, and a long record's plans on a fine grid are tens of megabytes each."""
 
 
 class Simulator(SimulatorBase):
@@ -274,10 +277,15 @@ class Simulator(SimulatorBase):
             input_values = feedback_inputs(feedback, input_time, dict(input_values))
             grid = fine_times(grid, feedback.step)
         plan = make_plan(input_time, input_values, inputs.variables, grid)
-        if len(self._plans) >= PLAN_CACHE:
-            self._plans.pop(next(iter(self._plans)))
         copies = tuple(np.array(a, dtype=float, copy=True) for a in arrays)
-        self._plans[key] = (arrays, copies, (plan, grid))
+        entry = (arrays, copies, (plan, grid))
+        size = array_bytes(entry)
+        while self._plans and (
+            len(self._plans) >= PLAN_CACHE
+            or size + sum(array_bytes(e) for e in self._plans.values()) > MAX_BYTES
+        ):
+            self._plans.pop(next(iter(self._plans)))
+        self._plans[key] = entry
         return plan, grid
 
     def _check_reset(
