@@ -17,7 +17,7 @@ from fmuid.profiling.checks import (
     refit_from,
     switches,
 )
-from fmuid.profiling.ends import End, locate
+from fmuid.profiling.ends import End, Located, locate
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ProfileQuality
 from fmuid.profiling.walk import WalkOptions, first_step, path_tangent, walk
@@ -131,6 +131,7 @@ def settle_branch(
     fresh = True
     checks = options.checks
     tangent = None if jacobian is None else path_tangent(jacobian, index)
+    located = Located()
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
             break
@@ -147,6 +148,7 @@ def settle_branch(
                 options.end_tolerance,
                 outermost=options.overshoot > 0,
                 tangent=tangent,
+                located=located,
             )
             for kind, t in thresholds.items()
         }
