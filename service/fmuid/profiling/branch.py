@@ -177,9 +177,15 @@ def settle_branch(
             if not valleys and not others and not near:
                 continue
             zi = float(site.z[index])
+            settled = [] if site.carried else [site]
+            tol = checks.lower_tol * thr
             with counting() as checked:
-                from_valleys = refit_from(problem, index, zi, [*valleys, *near], checks.refit)
-                from_others = refit_from(problem, index, zi, others, checks.refit)
+                from_valleys = refit_from(
+                    problem, index, zi, [*valleys, *near], checks.refit, settled, tol
+                )
+                from_others = refit_from(
+                    problem, index, zi, others, checks.refit, [*settled, *from_valleys], tol
+                )
                 if others:
                     known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
             found = from_valleys + from_others

@@ -57,6 +57,10 @@ class CheckOptions:
     health_grid: int = GRID_SIDE
 
 
+#: Two minima share a basin when no parameter differs by more than this fraction of its range.
+BASIN = 1e-3
+
+
 def diverse_starts(problem: Problem, n: int, seed: Sequence[int]) -> np.ndarray:
     """Return ``n`` seeded Latin-hypercube points within the bounds, in fitted coordinates."""
     if n <= 0:
@@ -73,24 +77,50 @@ def refit_from(
     z_fixed: float | None,
     starts: Sequence[np.ndarray],
     options: FitOptions,
+    known: Sequence[WalkPoint] | None = None,
+    tol: float = 0.0,
 ) -> list[WalkPoint]:
     """Re-fit from each start, parameter ``index`` held at ``z_fixed`` (``None``: all free).
 
-    Failed re-fits are left out.
+    ``known``: minima already re-fitted at the same ``z_fixed`` (the checked point itself, the
+    check's earlier re-fits; each re-fit made here joins them; ``None``: every re-fit runs to
+    its tolerance). A re-fit that evaluates a point
+    in a known minimum's basin (every parameter within ``BASIN`` of its range) at a chi2 not
+    below the minimum's by ``tol`` or more ends there with that minimum as its result: it would
+    descend into the minimum (trust region converges within a basin), and a check learns only
+    whether a start reaches a lower valley, not the same one again to full tolerance. Failed
+    re-fits are left out.
     """
     free = np.ones(problem.n_free, bool)
     if index is not None:
         free[index] = False
+    span = problem.z_upper - problem.z_lower
+    seen = [] if known is None else list(known)
+    landed: list[WalkPoint] = []
+
+    def stop(z: np.ndarray, chi2: float) -> bool:
+        for k in seen:
+            if chi2 >= k.chi2 - tol and np.max(np.abs(z - k.z) / span) <= BASIN:
+                landed.append(k)
+                return True
+        return False
+
     out = []
     for start in starts:
         z0 = np.array(start, dtype=float)
         if index is not None and z_fixed is not None:
             z0[index] = z_fixed
+        landed.clear()
         try:
-            z, chi2, _ = refine(problem, z0, free=free, options=options)
+            z, chi2, _ = refine(
+                problem, z0, free=free, options=options, stop=None if known is None else stop
+            )
         except FmuidError:
             continue
-        out.append(WalkPoint(z, chi2))
+        point = landed[0] if landed else WalkPoint(z, chi2)
+        out.append(point)
+        if not landed:
+            seen.append(point)
     return out
 
 
@@ -125,11 +155,11 @@ def check_fit(problem: Problem, options: CheckOptions, seed: int) -> list[WalkPo
 def distinct_valleys(
     points: Sequence[WalkPoint], problem: Problem, best: WalkPoint, ceiling: float
 ) -> list[np.ndarray]:
-    """Minima below ``ceiling`` that differ from ``best`` and from each other (by 1e-3 of span)."""
+    """Minima below ``ceiling`` that differ from ``best`` and from each other (by ``BASIN``)."""
     span = problem.z_upper - problem.z_lower
     kept: list[np.ndarray] = [best.z]
     for p in sorted(points, key=lambda q: q.chi2):
-        if p.chi2 <= ceiling and all(np.max(np.abs(p.z - k) / span) > 1e-3 for k in kept):
+        if p.chi2 <= ceiling and all(np.max(np.abs(p.z - k) / span) > BASIN for k in kept):
             kept.append(p.z)
     return kept[1:]
 
@@ -139,7 +169,7 @@ def basins(
 ) -> list[WalkPoint]:
     """Return the lowest ``keep`` re-fits of ``found`` in basins other than ``seen`` or each other.
 
-    Two re-fits share a basin when no parameter differs by more than 1e-3 of its range. A
+    Two re-fits share a basin when no parameter differs by more than ``BASIN`` of its range. A
     check's diverse starts end in such basins; the checks further in along the same branch
     start from them (cheaper than new diverse starts, and they follow the same valleys).
     """
@@ -147,7 +177,7 @@ def basins(
     kept: list[WalkPoint] = []
     for p in sorted(found, key=lambda q: q.chi2):
         if len(kept) < keep and all(
-            np.max(np.abs(p.z - q.z) / span) > 1e-3 for q in [*seen, *kept]
+            np.max(np.abs(p.z - q.z) / span) > BASIN for q in [*seen, *kept]
         ):
             kept.append(p)
     return kept
