@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from fmuid.profiling.checks import CheckOptions, basins, refit_from
+from fmuid.profiling.checks import CheckOptions, basins, inner_flips, refit_from
 from fmuid.profiling.points import WalkPoint
 
 BOX = SimpleNamespace(z_lower=np.array([0.0, -1.0]), z_upper=np.array([1.0, 1.0]))
@@ -62,3 +62,15 @@ def test_a_check_refit_entering_a_known_basin_ends_there_and_others_run_to_their
     for fit in (plain[1], stopped[1]):
         assert abs(fit.z[1] - lower.x) < 1e-4
         assert abs(fit.chi2 - lower.fun) < 1e-6
+
+
+def test_inner_flips_follow_the_outer_ends_refits_and_drop_those_that_came_back():
+    inner = np.array([0.5, 0.0, 1.0, 0.3])
+    flips = [np.array([0.5, 1.0, 1.0, 0.3]), np.array([0.5, 0.0, -1.0, 0.3])]
+    behind = WalkPoint(np.array([0.9, 0.97, 0.2, 0.1]), 7.0)
+    outer = {(1, 1.0): behind, (2, -1.0): None}
+    starts = inner_flips(flips, inner, outer, smooth=True)
+    assert len(starts) == 1 and starts[0] is behind.z
+    kept = inner_flips(flips, inner, outer, smooth=False)
+    assert kept[0] is behind.z and kept[1] is flips[1]
+    assert all(a is b for a, b in zip(inner_flips(flips, inner, {}, smooth=True), flips))

@@ -13,8 +13,10 @@ from fmuid.profiling.checks import (
     basins,
     bound_flips,
     diverse_starts,
+    inner_flips,
     jumps,
     refit_from,
+    same_basin,
     switches,
 )
 from fmuid.profiling.ends import End, Located, locate
@@ -76,9 +78,15 @@ def settle_branch(
     moved to the site. An end where other parameters sit on a bound is re-fitted once more per
     such parameter, from the end with it moved to its other bound
     (:func:`fmuid.profiling.checks.bound_flips`): the valley on the other side of that bound
-    is found by the profile's shape, not by the diverse starts' luck. A lower chi2 there means
+    is found by the profile's shape, not by the diverse starts' luck; at the inner (pointwise)
+    end such a flip starts from the outer end's re-fit of it, or is left out when that came
+    back into the walked valley and the walk has no jump or switch
+    (:func:`fmuid.profiling.checks.inner_flips`). A check's re-fit that enters the basin of a
+    minimum it already knows (the checked point, the check's earlier re-fits) ends there
+    (:func:`fmuid.profiling.checks.refit_from`). A lower chi2 there means
     the walk followed a higher valley: the stretch towards the estimate is re-walked from the
-    lower valley, the walk goes on outwards from it, and the ends are located again.
+    lower valley, the walk goes on outwards from it, and the ends are located again (brackets
+    the re-walk left as they were are not located again: :class:`fmuid.profiling.ends.Located`).
 
     Parameters
     ----------
@@ -164,8 +172,12 @@ def settle_branch(
             tangent,
         )
         counts.jumps = max(counts.jumps, sum(1 for *_, why in sites if why != "end"))
+        smooth = all(why == "end" for *_, why in sites)
+        outer: dict[tuple[int, float], WalkPoint | None] | None = None
         lower = None
-        for site, diverse, near, _ in sites:
+        for site, diverse, near, why in sites:
+            if why == "end" and outer is not None:
+                near = inner_flips(near, site.z, outer, smooth)
             others: list[np.ndarray] = []
             if diverse:
                 others = (
@@ -180,15 +192,26 @@ def settle_branch(
             settled = [] if site.carried else [site]
             tol = checks.lower_tol * thr
             with counting() as checked:
-                from_valleys = refit_from(
-                    problem, index, zi, [*valleys, *near], checks.refit, settled, tol
-                )
+                found = refit_from(problem, index, zi, valleys, checks.refit, settled, tol)
+                record = why == "end" and outer is None
+                flipped: dict[tuple[int, float], WalkPoint | None] = {}
+                for start in near:
+                    got = refit_from(
+                        problem, index, zi, [start], checks.refit, [*settled, *found], tol
+                    )
+                    found += got
+                    if record and got:
+                        k = int(np.flatnonzero(start != site.z)[0])
+                        back = same_basin(problem, got[0].z, site.z)
+                        flipped[(k, float(start[k]))] = None if back else got[0]
+                if record:
+                    outer = flipped
                 from_others = refit_from(
-                    problem, index, zi, others, checks.refit, [*settled, *from_valleys], tol
+                    problem, index, zi, others, checks.refit, [*settled, *found], tol
                 )
                 if others:
-                    known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
-            found = from_valleys + from_others
+                    known = basins(problem, from_others, [site, *found], checks.end_starts)
+            found = found + from_others
             counts.check_sims += checked.simulations
             counts.checks += 1
             counts.starts += len(valleys) + len(others) + len(near)
@@ -248,7 +271,8 @@ def _sites(
     after it needs none: its re-fit started from the old valley and descended out of it); then
     the outermost end, the other end and the jumps of the chi2 path. An end where other
     parameters sit on a bound is also re-fitted once per such parameter with it moved to its
-    other bound (:func:`fmuid.profiling.checks.bound_flips`).
+    other bound (:func:`fmuid.profiling.checks.bound_flips`; the outer end's first, the inner
+    end's from its re-fits: :func:`fmuid.profiling.checks.inner_flips`).
     """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
     out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []

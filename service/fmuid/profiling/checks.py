@@ -94,13 +94,12 @@ def refit_from(
     free = np.ones(problem.n_free, bool)
     if index is not None:
         free[index] = False
-    span = problem.z_upper - problem.z_lower
     seen = [] if known is None else list(known)
     landed: list[WalkPoint] = []
 
     def stop(z: np.ndarray, chi2: float) -> bool:
         for k in seen:
-            if chi2 >= k.chi2 - tol and np.max(np.abs(z - k.z) / span) <= BASIN:
+            if chi2 >= k.chi2 - tol and same_basin(problem, z, k.z):
                 landed.append(k)
                 return True
         return False
@@ -156,10 +155,9 @@ def distinct_valleys(
     points: Sequence[WalkPoint], problem: Problem, best: WalkPoint, ceiling: float
 ) -> list[np.ndarray]:
     """Minima below ``ceiling`` that differ from ``best`` and from each other (by ``BASIN``)."""
-    span = problem.z_upper - problem.z_lower
     kept: list[np.ndarray] = [best.z]
     for p in sorted(points, key=lambda q: q.chi2):
-        if p.chi2 <= ceiling and all(np.max(np.abs(p.z - k) / span) > BASIN for k in kept):
+        if p.chi2 <= ceiling and not any(same_basin(problem, p.z, k) for k in kept):
             kept.append(p.z)
     return kept[1:]
 
@@ -173,14 +171,46 @@ def basins(
     check's diverse starts end in such basins; the checks further in along the same branch
     start from them (cheaper than new diverse starts, and they follow the same valleys).
     """
-    span = problem.z_upper - problem.z_lower
     kept: list[WalkPoint] = []
     for p in sorted(found, key=lambda q: q.chi2):
-        if len(kept) < keep and all(
-            np.max(np.abs(p.z - q.z) / span) > BASIN for q in [*seen, *kept]
-        ):
+        if len(kept) < keep and not any(same_basin(problem, p.z, q.z) for q in [*seen, *kept]):
             kept.append(p)
     return kept
+
+
+def same_basin(problem: Problem, a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether no parameter differs between ``a`` and ``b`` by more than ``BASIN`` of its range."""
+    return bool(np.max(np.abs(a - b) / (problem.z_upper - problem.z_lower)) <= BASIN)
+
+
+def inner_flips(
+    flips: Sequence[np.ndarray],
+    z: np.ndarray,
+    outer: dict[tuple[int, float], WalkPoint | None],
+    smooth: bool,
+) -> list[np.ndarray]:
+    """Return the starts of the bound flips at a branch's inner (pointwise) end at ``z``.
+
+    ``outer`` holds the re-fits of the flips at the outer (simultaneous) end of the same walk,
+    keyed by the flipped parameter and the bound it was moved to: ``None`` when that re-fit
+    came back into the outer end's own valley. A flip made there too starts from its re-fit
+    when that reached another minimum (the valley behind the bound, followed to this end from
+    nearby rather than crossed to again), and is left out when it came back and the walk is
+    ``smooth`` (no jump of its chi2 path, no switch of valley): the valley behind the bound,
+    not lower at the outer end, would have to cross the walked one twice between the ends to
+    be lower here (at the optimum the walked valley is the lowest). Other flips are kept.
+    """
+    out = []
+    for start in flips:
+        k = int(np.flatnonzero(start != z)[0])
+        key = (k, float(start[k]))
+        if key not in outer:
+            out.append(start)
+        elif outer[key] is not None:
+            out.append(outer[key].z)  # type: ignore[union-attr]
+        elif not smooth:
+            out.append(start)
+    return out
 
 
 def jumps(side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float) -> list[int]:
