@@ -72,8 +72,9 @@ def settle_branch(
     After the walk, each threshold's crossing is located by root-finding on re-fits
     (:func:`fmuid.profiling.ends.locate`). At each end and at each jump of the profile the
     other parameters are re-fitted from the other ``valleys`` of the fit check and, where the
-    profile is non-parabolic, jumps, has another parameter on a bound, or ``thorough`` is set,
-    from diverse starts: seeded Latin-hypercube points at the first such site, and at later
+    profile jumps or bends, the Fisher deviation is infinite, an end's bound flip (below)
+    reached another minimum than the walked one, or ``thorough`` is set, from diverse starts:
+    seeded Latin-hypercube points at the first such site, and at later
     sites the distinct basins those starts reached (:func:`fmuid.profiling.checks.basins`),
     moved to the site. An end where other parameters sit on a bound is re-fitted once more per
     such parameter, from the end with it moved to its other bound
@@ -176,36 +177,38 @@ def settle_branch(
         outer: dict[tuple[int, float], WalkPoint | None] | None = None
         lower = None
         for site, diverse, near, why in sites:
+            bound = why == "end" and bool(near)
             if why == "end" and outer is not None:
                 near = inner_flips(near, site.z, outer, smooth)
-            others: list[np.ndarray] = []
-            if diverse:
-                others = (
-                    list(diverse_starts(problem, checks.end_starts, (seed, index, round_)))
-                    if fresh
-                    else [p.z for p in known]
-                )
-                fresh = False
-            if not valleys and not others and not near:
+            if not valleys and not diverse and not near:
                 continue
             zi = float(site.z[index])
             settled = [] if site.carried else [site]
             tol = checks.lower_tol * thr
             with counting() as checked:
                 found = refit_from(problem, index, zi, valleys, checks.refit, settled, tol)
-                record = why == "end" and outer is None
                 flipped: dict[tuple[int, float], WalkPoint | None] = {}
+                reached = False
                 for start in near:
                     got = refit_from(
                         problem, index, zi, [start], checks.refit, [*settled, *found], tol
                     )
                     found += got
-                    if record and got:
+                    back = not got or same_basin(problem, got[0].z, site.z)
+                    reached = reached or (bound and not back)
+                    if bound and outer is None and got:
                         k = int(np.flatnonzero(start != site.z)[0])
-                        back = same_basin(problem, got[0].z, site.z)
                         flipped[(k, float(start[k]))] = None if back else got[0]
-                if record:
+                if bound and outer is None:
                     outer = flipped
+                others: list[np.ndarray] = []
+                if diverse or reached:
+                    others = (
+                        list(diverse_starts(problem, checks.end_starts, (seed, index, round_)))
+                        if fresh
+                        else [p.z for p in known]
+                    )
+                    fresh = False
                 from_others = refit_from(
                     problem, index, zi, others, checks.refit, [*settled, *found], tol
                 )
@@ -266,6 +269,10 @@ def _sites(
 ) -> list[tuple[WalkPoint, bool, list[np.ndarray], str]]:
     """Points to check: ``(point, with diverse starts, neighbours' starts, why)``.
 
+    The diverse starts are marked where the chi2 path jumps or bends, the Fisher deviation is
+    infinite or ``thorough`` is set; at an end with bound flips the caller adds them when a
+    flip reached another minimum (a second valley on the far side of the bound).
+
     First the point before each switch of valley (:func:`fmuid.profiling.checks.switches`),
     re-fitted from the valley the walk switched to (one re-fit from a nearby minimum; the point
     after it needs none: its re-fit started from the old valley and descended out of it); then
@@ -283,9 +290,8 @@ def _sites(
         end = ends.get(kind)
         if kind not in thresholds or end is None or end.point is None or end.z is None:
             continue
-        flips = bound_flips(problem, end.point.z, index)
-        diverse = thorough or not np.isfinite(sd_z) or bool(flips) or bool(found)
-        out.append((end.point, diverse, flips, "end"))
+        diverse = thorough or not np.isfinite(sd_z) or bool(found)
+        out.append((end.point, diverse, bound_flips(problem, end.point.z, index), "end"))
     out.extend((side[k], True, [], "jump") for k in found)
     return out
 

@@ -28,9 +28,10 @@ class CheckOptions:
         Latin-hypercube starts of a check at a CI end or a jump.
     always
         Check every CI end from ``end_starts`` diverse starts; otherwise only ends whose profile
-        is non-parabolic, jumps, is open or has another parameter on a bound (and every end
-        when the FMU health check found the objective non-smooth). Ends are always re-fitted
-        from the other valleys the fit check found.
+        jumps or bends, whose Fisher deviation is infinite, or where a re-fit with another
+        parameter moved from its bound to its other bound reached another minimum than the
+        walked one (and every end when the FMU health check found the objective non-smooth).
+        Ends are always re-fitted from the other valleys the fit check found.
     lower_tol
         A re-fit lower than the walk's chi2 by this fraction of the simultaneous threshold
         counts as a lower valley.
