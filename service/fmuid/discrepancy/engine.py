@@ -39,16 +39,17 @@ from fmuid.discrepancy import residual_tests as rt
 from fmuid.discrepancy.absorb import absorbed
 from fmuid.discrepancy.catalogue import study_catalogue
 from fmuid.discrepancy.correction import arx_correction
-from fmuid.discrepancy.forward import Step, forward
+from fmuid.discrepancy.coupling import coupling_error, step_scale
+from fmuid.discrepancy.forward import effect_steps, forward
 from fmuid.discrepancy.generic import describe, generic_rival, generic_test, local_model
 from fmuid.discrepancy.levels import level_location
-from fmuid.discrepancy.result import AddedEstimate, Diagnosis, EffectStep
+from fmuid.discrepancy.result import Diagnosis
 from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
 from fmuid.discrepancy.scan import CandidateFit, augmented
 from fmuid.discrepancy.schema import AbsorbedOut, CorrectionOut, TieOut
 from fmuid.discrepancy.settle import settles, settling_tests
 from fmuid.discrepancy.tasks import candidate_pool
-from fmuid.discrepancy.validate import coupling_error, validation
+from fmuid.discrepancy.validate import validation
 from fmuid.engine.count import counting
 from fmuid.estimation.optimize import (
     FitOptions,
@@ -136,30 +137,6 @@ def _correction(
             "p_value": generic.p_value,
         }
     return correction
-
-
-def _steps(
-    steps: Sequence[Step], estimates: dict[str, AddedEstimate], coupling: float | None
-) -> tuple[EffectStep, ...]:
-    out = []
-    for s in steps:
-        e = s.effect
-        values = {n: estimates[n].estimate for n in e.names}
-        fine = e.side in ("feedback", "input") or e.effect == "output_lag"
-        out.append(
-            EffectStep(
-                e.effect,
-                e.label,
-                e.sentence(values),
-                {n: estimates[n] for n in e.names},
-                s.chi2_before,
-                s.fit.chi2,
-                s.fit.p_value,
-                s.p_adjusted,
-                coupling if fine else None,
-            )
-        )
-    return tuple(out)
 
 
 def refit(problem: Problem, fit: FitResult) -> FitResult:
@@ -329,7 +306,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     run.lap("profiles")
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:
-        at_study = augmented(problem, applied)
+        at_study = augmented(problem, applied, step_scale(aug))
         absorbed_by = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
         run.report("profiles of the original parameters before and after")
         run.lap("absorbed")
@@ -360,7 +337,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     lrt = float(stats.chi2.sf(max(fit.chi2 - final_fit.chi2, 0.0), len(added)))
     concealed = not rt.holm(tests_before, opts.alpha)
     residuals_pass = not rt.holm(tests_after, opts.alpha)
-    effect_steps = _steps(steps, estimates, coupling)
+    reported = effect_steps(steps, estimates, coupling)
     leftover = None if residuals_pass else _correction(aug, final_fit.estimates, None, None)
     cost, stages = run.finish("validation")
     return Diagnosis(
@@ -368,7 +345,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         tests_after=tuple(tests_after),
         effect=best.candidate.effect,
         description=explain.explained(
-            effect_steps,
+            reported,
             fit.chi2,
             final_fit.chi2,
             lrt,
@@ -391,7 +368,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         absorbed={n: AbsorbedOut.model_validate(a) for n, a in absorbed_by.items()},
         discriminating_experiment=DiscriminatingOut.of(proposal) if proposal else None,
         generic_correction=None if leftover is None else CorrectionOut.model_validate(leftover),
-        effects=effect_steps,
+        effects=reported,
         validation=tuple(checked),
         cost=cost,
         stages=stages,

@@ -7,6 +7,8 @@ of it (round 2), and so on up to :data:`MAX_EFFECTS`. Each round is one test at 
 level, so a false addition at any step has probability at most that level. After the second
 addition, the first is dropped when the second alone explains the data as well (its chi2 drop
 over the second alone is not significant): the first effect was standing in for the second.
+An accepted fit is first moved to a fine step its chi2 no longer feels (:mod:`.coupling`), so
+that the next round does not read the coupling's error as an effect.
 """
 
 from __future__ import annotations
@@ -17,7 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from fmuid.discrepancy.augment import FINE
+from fmuid.discrepancy.coupling import settle_step, step_scale
 from fmuid.discrepancy.effects import Effect
+from fmuid.discrepancy.result import AddedEstimate, EffectStep
 from fmuid.discrepancy.scan import CandidateFit, Scanner
 from fmuid.estimation.optimize import FitOptions, jacobian
 
@@ -63,7 +68,8 @@ def _scanner(fit: CandidateFit) -> Scanner:
 
 
 def _fitted(scanner: Scanner, f: CandidateFit, options: FitOptions) -> CandidateFit:
-    return f if f.fitted else scanner.fit(f, options)
+    """Fit the candidate fully, on a fine step its chi2 no longer feels (:mod:`.coupling`)."""
+    return settle_step(scanner, f if f.fitted else scanner.fit(f, options), options)
 
 
 def forward(
@@ -145,3 +151,34 @@ def _drop_stand_in(
     if stats.chi2.sf(drop, len(steps[0].effect.names)) < alpha:
         return steps
     return [Step(alone, base.chi2, float(np.clip(adjusted[k], 0.0, 1.0)))]
+
+
+def effect_steps(
+    steps: Sequence[Step], estimates: dict[str, AddedEstimate], coupling: float | None
+) -> tuple[EffectStep, ...]:
+    """Return the accepted steps as the result reports them.
+
+    ``estimates``: the added parameters' estimates and intervals from the final model's
+    profiles; ``coupling``: the final model's coupling error (:func:`.coupling.coupling_error`),
+    given to the effects on the fine grid.
+    """
+    out = []
+    for s in steps:
+        e = s.effect
+        values = {n: estimates[n].estimate for n in e.names}
+        fine = e.side in ("feedback", "input") or e.effect == "output_lag"
+        out.append(
+            EffectStep(
+                e.effect,
+                e.label,
+                e.sentence(values),
+                {n: estimates[n] for n in e.names},
+                s.chi2_before,
+                s.fit.chi2,
+                s.fit.p_value,
+                s.p_adjusted,
+                coupling if fine else None,
+                FINE / step_scale(s.fit.problem) if fine else None,
+            )
+        )
+    return tuple(out)

@@ -107,6 +107,9 @@ class EffectStep:
         For effects on a fine grid (feedback, input effects, output lags): the largest change of
         the final model's predictions, in sigmas, when that grid's step is halved; None
         otherwise.
+    steps_per_sample
+        For those effects: fine-grid steps per median sample interval of the model after this
+        step (4 by default, more when the step was refined, :mod:`.coupling`); None otherwise.
 
     """
 
@@ -119,6 +122,7 @@ class EffectStep:
     p_value: float
     p_adjusted: float
     coupling_error: float | None = None
+    steps_per_sample: float | None = None
 
     @property
     def chi2_drop(self) -> float:

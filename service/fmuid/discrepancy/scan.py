@@ -126,11 +126,14 @@ def sensitivity_basis(jacobian: np.ndarray) -> np.ndarray:
     return u[:, s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
 
 
-def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
+def augmented(
+    root: Problem, candidates: Sequence[Effect], step_scale: float | None = None
+) -> Problem:
     """Return the root problem with the effects' parameters added and the effects applied.
 
     With no effect, the root problem simulated as its augmentations are (on their fine input
-    grid when the FMU needs it: :attr:`AugmentedPredictor.fine_inputs`).
+    grid when the FMU needs it: :attr:`AugmentedPredictor.fine_inputs`). The fine step is the
+    root's (an augmented root's refined step, :mod:`.coupling`) unless ``step_scale`` is given.
     """
     params = dict(root.parameter_specs)
     for c in candidates:
@@ -138,10 +141,12 @@ def augmented(root: Problem, candidates: Sequence[Effect]) -> Problem:
             params[p.name] = p.spec
     base = root.predictor
     effects = tuple(candidates)
+    scale = 1.0
     if isinstance(base, AugmentedPredictor):
-        effects = (*base.effects, *effects)
+        effects, scale = (*base.effects, *effects), base.step_scale
         base = base.base
-    wrapped = AugmentedPredictor(base, effects) if isinstance(base, FmuPredictor) else None
+    scale = scale if step_scale is None else step_scale
+    wrapped = AugmentedPredictor(base, effects, scale) if isinstance(base, FmuPredictor) else None
     predictor = wrapped if wrapped is not None and (effects or wrapped.fine_inputs) else base
     return Problem(
         root.fmu_path,

@@ -124,6 +124,10 @@ class EffectStepOut(Block):
     p_value: float
     p_adjusted: float
     coupling_error: float | None = None
+    steps_per_sample: float | None = omitted_if_none(
+        "Fine-grid steps per median sample interval of the model after this step (effects on "
+        "the fine grid only)."
+    )
 
 
 class StageCostOut(CostOut):

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fmuid.discrepancy.augment import FINE
 from fmuid.discrepancy.catalogue import study_catalogue
 from fmuid.discrepancy.locate import residual_series
 from fmuid.discrepancy.residual_tests import Series
@@ -48,14 +49,16 @@ def augmented_problem_of(problem: Problem, diagnosis: Diagnosis) -> Problem:
     problem
         The base problem that was diagnosed.
     diagnosis
-        Its diagnosis; the candidates whose parameters it added are switched on.
+        Its diagnosis; the candidates whose parameters it added are switched on, on the fine
+        step the diagnosis settled on.
     """
     if not diagnosis.added_parameters:
         return problem
     cands = study_catalogue(problem, diagnosis.parameters_before)
     added = set(diagnosis.added_parameters)
     chosen = [c for c in cands if set(c.names) <= added]
-    return augmented(problem, chosen)
+    fine = [s.steps_per_sample for s in diagnosis.effects if s.steps_per_sample]
+    return augmented(problem, chosen, FINE / fine[-1] if fine else None)
 
 
 def diagnosis_series(

@@ -304,6 +304,7 @@ def _step(e: dict[str, Any]) -> EffectStep:
         float(e["p_value"]),
         float(e.get("p_adjusted", e["p_value"])),
         e.get("coupling_error"),
+        e.get("steps_per_sample"),
     )
 
 
