@@ -58,3 +58,25 @@ def test_an_end_in_a_valley_behind_the_other_bound_is_the_exact_crossing():
     end = result.ends["simultaneous"]
     assert abs(end.z - exact) < 0.01 * exact
     assert result.quality.lower_valleys >= 1
+
+
+def test_a_flip_that_comes_back_spends_no_diverse_starts_and_the_end_is_exact():
+    """One valley with ``z1`` pinned on its lower bound (its minimum lies below it): the flip
+    to the upper bound re-fits back onto the lower one, a bound with no valley behind it, so
+    the end is checked by that one re-fit; the end is the closed-form ``sqrt(5) / 3``."""
+    problem = SimpleNamespace(
+        residuals=lambda z: np.array([3.0 * z[0], 2.0 + 10.0 * (z[1] + 0.5)]),
+        z_lower=np.array([-5.0, 0.0]),
+        z_upper=np.array([5.0, 1.0]),
+        n_free=2,
+        n_data=2,
+    )
+    z_hat = np.array([0.0, 0.0])
+    chi2_hat = float(np.sum(problem.residuals(z_hat) ** 2))
+    result = settle_branch(
+        problem, z_hat, chi2_hat, 0, 1, {"simultaneous": 5.0}, 1.0 / 3.0, WalkOptions()
+    )
+    assert abs(result.ends["simultaneous"].z - np.sqrt(5.0) / 3.0) < 1e-3 * np.sqrt(5.0) / 3.0
+    assert result.quality.checks == 1
+    assert result.quality.starts == 1
+    assert result.quality.lower_valleys == 0

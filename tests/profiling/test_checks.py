@@ -1,10 +1,11 @@
-"""The basins that later right-valley checks of a branch start from."""
+"""The basins that later right-valley checks of a branch start from, and re-fits that end in one."""
 
 from types import SimpleNamespace
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
-from fmuid.profiling.checks import basins
+from fmuid.profiling.checks import CheckOptions, basins, inner_flips, refit_from
 from fmuid.profiling.points import WalkPoint
 
 BOX = SimpleNamespace(z_lower=np.array([0.0, -1.0]), z_upper=np.array([1.0, 1.0]))
@@ -23,3 +24,53 @@ def test_basins_drop_the_walks_own_and_repeats_and_keep_the_lowest():
     assert [p.chi2 for p in kept] == [11.0, 12.0, 15.0]
     assert [p.chi2 for p in basins(BOX, found, [walk], keep=2)] == [11.0, 12.0]
     assert basins(BOX, found[:1], [walk], keep=3) == []
+
+
+def _two_valleys(z: np.ndarray) -> np.ndarray:
+    """Two minima along ``z1`` (near -1 and +1, the one near -1 lower), ``z0`` held fixed."""
+    return np.array([3.0 * (z[1] ** 2 - 1.0), 0.2 * (z[1] + 0.3) + z[0]])
+
+
+def test_a_check_refit_entering_a_known_basin_ends_there_and_others_run_to_their_minimum():
+    """Against the minima of scipy's bounded scalar minimiser on each side of the ridge."""
+    calls = []
+
+    def residuals(z: np.ndarray) -> np.ndarray:
+        calls.append(1)
+        return _two_valleys(z)
+
+    box = SimpleNamespace(
+        residuals=residuals, z_lower=np.array([-1.0, -2.0]), z_upper=np.array([1.0, 2.0]), n_free=2
+    )
+    options = CheckOptions().refit
+
+    def chi2_at(z1: float) -> float:
+        r = _two_valleys(np.array([0.0, z1]))
+        return float(r @ r)
+
+    upper = minimize_scalar(chi2_at, bounds=(0.0, 2.0), method="bounded", options={"xatol": 1e-9})
+    lower = minimize_scalar(chi2_at, bounds=(-2.0, 0.0), method="bounded", options={"xatol": 1e-9})
+    site = WalkPoint(np.array([0.0, upper.x]), float(upper.fun))
+    starts = [np.array([0.0, 1.6]), np.array([0.0, -1.7])]
+    plain = refit_from(box, 0, 0.0, starts, options)
+    n_plain = len(calls)
+    calls.clear()
+    stopped = refit_from(box, 0, 0.0, starts, options, [site], 1e-3)
+    assert len(calls) < n_plain
+    assert stopped[0] is site
+    assert abs(plain[0].chi2 - upper.fun) < 1e-6
+    for fit in (plain[1], stopped[1]):
+        assert abs(fit.z[1] - lower.x) < 1e-4
+        assert abs(fit.chi2 - lower.fun) < 1e-6
+
+
+def test_inner_flips_follow_the_outer_ends_refits_and_drop_those_that_came_back():
+    inner = np.array([0.5, 0.0, 1.0, 0.3])
+    flips = [np.array([0.5, 1.0, 1.0, 0.3]), np.array([0.5, 0.0, -1.0, 0.3])]
+    behind = WalkPoint(np.array([0.9, 0.97, 0.2, 0.1]), 7.0)
+    outer = {(1, 1.0): behind, (2, -1.0): None}
+    starts = inner_flips(flips, inner, outer, smooth=True)
+    assert len(starts) == 1 and starts[0] is behind.z
+    kept = inner_flips(flips, inner, outer, smooth=False)
+    assert kept[0] is behind.z and kept[1] is flips[1]
+    assert all(a is b for a, b in zip(inner_flips(flips, inner, {}, smooth=True), flips))

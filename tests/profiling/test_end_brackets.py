@@ -8,7 +8,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from fmuid.estimation.optimize import FitOptions
-from fmuid.profiling.ends import locate
+from fmuid.profiling.ends import Located, locate
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.walk import path_tangent
 
@@ -100,3 +100,36 @@ def test_a_rise_read_on_a_stale_jacobian_is_confirmed_before_it_brackets_an_end(
     )
     assert end.settled
     assert abs(end.z - exact) < 0.01 * abs(exact - full.x[0])
+
+
+def test_a_bracket_located_once_is_not_located_again_after_the_side_grows():
+    """``chi2 = 9 z0^2 + (z1 - z0)^2`` profiles to ``9 z0^2`` (the threshold 1 is crossed at
+    ``z0 = 1/3``, closed form). Located twice with the same record, the second time with a
+    point added beyond the bracket (as a re-walk adds points), the end runs no simulation and
+    is the same."""
+    calls = []
+
+    def residuals(z: np.ndarray) -> np.ndarray:
+        calls.append(1)
+        return np.array([3.0 * z[0], z[1] - z[0]])
+
+    problem = SimpleNamespace(
+        residuals=residuals, z_lower=np.full(2, -5.0), z_upper=np.full(2, 5.0), n_free=2, n_data=2
+    )
+    side = [WalkPoint(np.array([0.0, 0.0]), 0.0), WalkPoint(np.array([0.5, 0.5]), 2.25)]
+    located = Located()
+    first = locate(problem, 0, 0.0, 0.0, 1.0, side, FitOptions(), located=located)
+    assert calls and abs(first.z - 1.0 / 3.0) < 1e-3 / 3.0
+    calls.clear()
+    again = locate(
+        problem,
+        0,
+        0.0,
+        0.0,
+        1.0,
+        [*side, WalkPoint(np.array([0.8, 0.8]), 5.76)],
+        FitOptions(),
+        located=located,
+    )
+    assert not calls
+    assert again.z == first.z

@@ -72,6 +72,7 @@ def refine(
     free: np.ndarray | None = None,
     options: FitOptions = FitOptions(),
     on_residuals: Callable[[np.ndarray], None] | None = None,
+    stop: Callable[[np.ndarray, float], bool] | None = None,
 ) -> tuple[np.ndarray, float, str]:
     """Trust-region reflective least squares in fitted coordinates within the bounds.
 
@@ -87,6 +88,9 @@ def refine(
         Tolerances and step settings.
     on_residuals
         Called with the weighted residuals of every evaluation (e.g. to report progress).
+    stop
+        Called with every evaluated point (all parameters) and its chi2; ``True`` ends the run
+        there and returns that point (no polish).
 
     Returns
     -------
@@ -114,21 +118,26 @@ def refine(
         residuals = safe_residuals(problem, z)
         if on_residuals is not None:
             on_residuals(residuals)
+        if stop is not None and stop(z, float(residuals @ residuals)):
+            raise _Stopped(z, float(residuals @ residuals))
         return residuals
 
     n_free = int(free.sum())
-    res = least_squares(
-        fun,
-        x0,
-        bounds=(lo, hi),
-        method="trf",
-        diff_step=options.diff_step,
-        ftol=options.ftol,
-        xtol=options.xtol,
-        gtol=options.gtol,
-        max_nfev=options.max_nfev or 100 * (n_free + 1),
-        x_scale="jac",
-    )
+    try:
+        res = least_squares(
+            fun,
+            x0,
+            bounds=(lo, hi),
+            method="trf",
+            diff_step=options.diff_step,
+            ftol=options.ftol,
+            xtol=options.xtol,
+            gtol=options.gtol,
+            max_nfev=options.max_nfev or 100 * (n_free + 1),
+            x_scale="jac",
+        )
+    except _Stopped as stopped:
+        return stopped.z, stopped.chi2, "stopped by the caller"
     if np.all(res.fun == FAILED_RESIDUAL):
         raise FitError(f"{problem.fmu_path.name}: the simulation failed at every trial point")
     x, chi2, message = res.x, float(2.0 * res.cost), str(res.message)
@@ -144,6 +153,14 @@ def refine(
             x, chi2, message = pol.x, float(pol.fun), f"{message}; polished (Powell)"
     z_full[free] = x
     return z_full, chi2, message
+
+
+class _Stopped(Exception):
+    """Raised inside :func:`refine`'s objective to end the run at a point its caller accepts."""
+
+    def __init__(self, z: np.ndarray, chi2: float) -> None:
+        super().__init__("stopped")
+        self.z, self.chi2 = z.copy(), chi2
 
 
 class _GaProblem(PymooProblem):

@@ -13,11 +13,13 @@ from fmuid.profiling.checks import (
     basins,
     bound_flips,
     diverse_starts,
+    inner_flips,
     jumps,
     refit_from,
+    same_basin,
     switches,
 )
-from fmuid.profiling.ends import End, locate
+from fmuid.profiling.ends import End, Located, locate
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ProfileQuality
 from fmuid.profiling.walk import WalkOptions, first_step, path_tangent, walk
@@ -70,15 +72,22 @@ def settle_branch(
     After the walk, each threshold's crossing is located by root-finding on re-fits
     (:func:`fmuid.profiling.ends.locate`). At each end and at each jump of the profile the
     other parameters are re-fitted from the other ``valleys`` of the fit check and, where the
-    profile is non-parabolic, jumps, has another parameter on a bound, or ``thorough`` is set,
-    from diverse starts: seeded Latin-hypercube points at the first such site, and at later
+    profile jumps or bends, the Fisher deviation is infinite, an end's bound flip (below)
+    reached another minimum than the walked one, or ``thorough`` is set, from diverse starts:
+    seeded Latin-hypercube points at the first such site, and at later
     sites the distinct basins those starts reached (:func:`fmuid.profiling.checks.basins`),
     moved to the site. An end where other parameters sit on a bound is re-fitted once more per
     such parameter, from the end with it moved to its other bound
     (:func:`fmuid.profiling.checks.bound_flips`): the valley on the other side of that bound
-    is found by the profile's shape, not by the diverse starts' luck. A lower chi2 there means
+    is found by the profile's shape, not by the diverse starts' luck; at the inner (pointwise)
+    end such a flip starts from the outer end's re-fit of it, or is left out when that came
+    back into the walked valley and the walk has no jump or switch
+    (:func:`fmuid.profiling.checks.inner_flips`). A check's re-fit that enters the basin of a
+    minimum it already knows (the checked point, the check's earlier re-fits) ends there
+    (:func:`fmuid.profiling.checks.refit_from`). A lower chi2 there means
     the walk followed a higher valley: the stretch towards the estimate is re-walked from the
-    lower valley, the walk goes on outwards from it, and the ends are located again.
+    lower valley, the walk goes on outwards from it, and the ends are located again (brackets
+    the re-walk left as they were are not located again: :class:`fmuid.profiling.ends.Located`).
 
     Parameters
     ----------
@@ -131,6 +140,7 @@ def settle_branch(
     fresh = True
     checks = options.checks
     tangent = None if jacobian is None else path_tangent(jacobian, index)
+    located = Located()
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
             break
@@ -147,6 +157,7 @@ def settle_branch(
                 options.end_tolerance,
                 outermost=options.overshoot > 0,
                 tangent=tangent,
+                located=located,
             )
             for kind, t in thresholds.items()
         }
@@ -162,25 +173,48 @@ def settle_branch(
             tangent,
         )
         counts.jumps = max(counts.jumps, sum(1 for *_, why in sites if why != "end"))
+        smooth = all(why == "end" for *_, why in sites)
+        outer: dict[tuple[int, float], WalkPoint | None] | None = None
         lower = None
-        for site, diverse, near, _ in sites:
-            others: list[np.ndarray] = []
-            if diverse:
-                others = (
-                    list(diverse_starts(problem, checks.end_starts, (seed, index, round_)))
-                    if fresh
-                    else [p.z for p in known]
-                )
-                fresh = False
-            if not valleys and not others and not near:
+        for site, diverse, near, why in sites:
+            bound = why == "end" and bool(near)
+            if why == "end" and outer is not None:
+                near = inner_flips(near, site.z, outer, smooth)
+            if not valleys and not diverse and not near:
                 continue
             zi = float(site.z[index])
+            settled = [] if site.carried else [site]
+            tol = checks.lower_tol * thr
             with counting() as checked:
-                from_valleys = refit_from(problem, index, zi, [*valleys, *near], checks.refit)
-                from_others = refit_from(problem, index, zi, others, checks.refit)
+                found = refit_from(problem, index, zi, valleys, checks.refit, settled, tol)
+                flipped: dict[tuple[int, float], WalkPoint | None] = {}
+                reached = False
+                for start in near:
+                    got = refit_from(
+                        problem, index, zi, [start], checks.refit, [*settled, *found], tol
+                    )
+                    found += got
+                    back = not got or same_basin(problem, got[0].z, site.z)
+                    reached = reached or (bound and not back)
+                    if bound and outer is None and got:
+                        k = int(np.flatnonzero(start != site.z)[0])
+                        flipped[(k, float(start[k]))] = None if back else got[0]
+                if bound and outer is None:
+                    outer = flipped
+                others: list[np.ndarray] = []
+                if diverse or reached:
+                    others = (
+                        list(diverse_starts(problem, checks.end_starts, (seed, index, round_)))
+                        if fresh
+                        else [p.z for p in known]
+                    )
+                    fresh = False
+                from_others = refit_from(
+                    problem, index, zi, others, checks.refit, [*settled, *found], tol
+                )
                 if others:
-                    known = basins(problem, from_others, [site, *from_valleys], checks.end_starts)
-            found = from_valleys + from_others
+                    known = basins(problem, from_others, [site, *found], checks.end_starts)
+            found = found + from_others
             counts.check_sims += checked.simulations
             counts.checks += 1
             counts.starts += len(valleys) + len(others) + len(near)
@@ -235,12 +269,17 @@ def _sites(
 ) -> list[tuple[WalkPoint, bool, list[np.ndarray], str]]:
     """Points to check: ``(point, with diverse starts, neighbours' starts, why)``.
 
+    The diverse starts are marked where the chi2 path jumps or bends, the Fisher deviation is
+    infinite or ``thorough`` is set; at an end with bound flips the caller adds them when a
+    flip reached another minimum (a second valley on the far side of the bound).
+
     First the point before each switch of valley (:func:`fmuid.profiling.checks.switches`),
     re-fitted from the valley the walk switched to (one re-fit from a nearby minimum; the point
     after it needs none: its re-fit started from the old valley and descended out of it); then
     the outermost end, the other end and the jumps of the chi2 path. An end where other
     parameters sit on a bound is also re-fitted once per such parameter with it moved to its
-    other bound (:func:`fmuid.profiling.checks.bound_flips`).
+    other bound (:func:`fmuid.profiling.checks.bound_flips`; the outer end's first, the inner
+    end's from its re-fits: :func:`fmuid.profiling.checks.inner_flips`).
     """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
     out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []
@@ -251,9 +290,8 @@ def _sites(
         end = ends.get(kind)
         if kind not in thresholds or end is None or end.point is None or end.z is None:
             continue
-        flips = bound_flips(problem, end.point.z, index)
-        diverse = thorough or not np.isfinite(sd_z) or bool(flips) or bool(found)
-        out.append((end.point, diverse, flips, "end"))
+        diverse = thorough or not np.isfinite(sd_z) or bool(found)
+        out.append((end.point, diverse, bound_flips(problem, end.point.z, index), "end"))
     out.extend((side[k], True, [], "jump") for k in found)
     return out
 

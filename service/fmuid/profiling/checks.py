@@ -28,9 +28,10 @@ class CheckOptions:
         Latin-hypercube starts of a check at a CI end or a jump.
     always
         Check every CI end from ``end_starts`` diverse starts; otherwise only ends whose profile
-        is non-parabolic, jumps, is open or has another parameter on a bound (and every end
-        when the FMU health check found the objective non-smooth). Ends are always re-fitted
-        from the other valleys the fit check found.
+        jumps or bends, whose Fisher deviation is infinite, or where a re-fit with another
+        parameter moved from its bound to its other bound reached another minimum than the
+        walked one (and every end when the FMU health check found the objective non-smooth).
+        Ends are always re-fitted from the other valleys the fit check found.
     lower_tol
         A re-fit lower than the walk's chi2 by this fraction of the simultaneous threshold
         counts as a lower valley.
@@ -57,6 +58,10 @@ class CheckOptions:
     health_grid: int = GRID_SIDE
 
 
+#: Two minima share a basin when no parameter differs by more than this fraction of its range.
+BASIN = 1e-3
+
+
 def diverse_starts(problem: Problem, n: int, seed: Sequence[int]) -> np.ndarray:
     """Return ``n`` seeded Latin-hypercube points within the bounds, in fitted coordinates."""
     if n <= 0:
@@ -73,24 +78,49 @@ def refit_from(
     z_fixed: float | None,
     starts: Sequence[np.ndarray],
     options: FitOptions,
+    known: Sequence[WalkPoint] | None = None,
+    tol: float = 0.0,
 ) -> list[WalkPoint]:
     """Re-fit from each start, parameter ``index`` held at ``z_fixed`` (``None``: all free).
 
-    Failed re-fits are left out.
+    ``known``: minima already re-fitted at the same ``z_fixed`` (the checked point itself, the
+    check's earlier re-fits; each re-fit made here joins them; ``None``: every re-fit runs to
+    its tolerance). A re-fit that evaluates a point
+    in a known minimum's basin (every parameter within ``BASIN`` of its range) at a chi2 not
+    below the minimum's by ``tol`` or more ends there with that minimum as its result: it would
+    descend into the minimum (trust region converges within a basin), and a check learns only
+    whether a start reaches a lower valley, not the same one again to full tolerance. Failed
+    re-fits are left out.
     """
     free = np.ones(problem.n_free, bool)
     if index is not None:
         free[index] = False
+    seen = [] if known is None else list(known)
+    landed: list[WalkPoint] = []
+
+    def stop(z: np.ndarray, chi2: float) -> bool:
+        for k in seen:
+            if chi2 >= k.chi2 - tol and same_basin(problem, z, k.z):
+                landed.append(k)
+                return True
+        return False
+
     out = []
     for start in starts:
         z0 = np.array(start, dtype=float)
         if index is not None and z_fixed is not None:
             z0[index] = z_fixed
+        landed.clear()
         try:
-            z, chi2, _ = refine(problem, z0, free=free, options=options)
+            z, chi2, _ = refine(
+                problem, z0, free=free, options=options, stop=None if known is None else stop
+            )
         except FmuidError:
             continue
-        out.append(WalkPoint(z, chi2))
+        point = landed[0] if landed else WalkPoint(z, chi2)
+        out.append(point)
+        if not landed:
+            seen.append(point)
     return out
 
 
@@ -125,11 +155,10 @@ def check_fit(problem: Problem, options: CheckOptions, seed: int) -> list[WalkPo
 def distinct_valleys(
     points: Sequence[WalkPoint], problem: Problem, best: WalkPoint, ceiling: float
 ) -> list[np.ndarray]:
-    """Minima below ``ceiling`` that differ from ``best`` and from each other (by 1e-3 of span)."""
-    span = problem.z_upper - problem.z_lower
+    """Minima below ``ceiling`` that differ from ``best`` and from each other (by ``BASIN``)."""
     kept: list[np.ndarray] = [best.z]
     for p in sorted(points, key=lambda q: q.chi2):
-        if p.chi2 <= ceiling and all(np.max(np.abs(p.z - k) / span) > 1e-3 for k in kept):
+        if p.chi2 <= ceiling and not any(same_basin(problem, p.z, k) for k in kept):
             kept.append(p.z)
     return kept[1:]
 
@@ -139,18 +168,50 @@ def basins(
 ) -> list[WalkPoint]:
     """Return the lowest ``keep`` re-fits of ``found`` in basins other than ``seen`` or each other.
 
-    Two re-fits share a basin when no parameter differs by more than 1e-3 of its range. A
+    Two re-fits share a basin when no parameter differs by more than ``BASIN`` of its range. A
     check's diverse starts end in such basins; the checks further in along the same branch
     start from them (cheaper than new diverse starts, and they follow the same valleys).
     """
-    span = problem.z_upper - problem.z_lower
     kept: list[WalkPoint] = []
     for p in sorted(found, key=lambda q: q.chi2):
-        if len(kept) < keep and all(
-            np.max(np.abs(p.z - q.z) / span) > 1e-3 for q in [*seen, *kept]
-        ):
+        if len(kept) < keep and not any(same_basin(problem, p.z, q.z) for q in [*seen, *kept]):
             kept.append(p)
     return kept
+
+
+def same_basin(problem: Problem, a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether no parameter differs between ``a`` and ``b`` by more than ``BASIN`` of its range."""
+    return bool(np.max(np.abs(a - b) / (problem.z_upper - problem.z_lower)) <= BASIN)
+
+
+def inner_flips(
+    flips: Sequence[np.ndarray],
+    z: np.ndarray,
+    outer: dict[tuple[int, float], WalkPoint | None],
+    smooth: bool,
+) -> list[np.ndarray]:
+    """Return the starts of the bound flips at a branch's inner (pointwise) end at ``z``.
+
+    ``outer`` holds the re-fits of the flips at the outer (simultaneous) end of the same walk,
+    keyed by the flipped parameter and the bound it was moved to: ``None`` when that re-fit
+    came back into the outer end's own valley. A flip made there too starts from its re-fit
+    when that reached another minimum (the valley behind the bound, followed to this end from
+    nearby rather than crossed to again), and is left out when it came back and the walk is
+    ``smooth`` (no jump of its chi2 path, no switch of valley): the valley behind the bound,
+    not lower at the outer end, would have to cross the walked one twice between the ends to
+    be lower here (at the optimum the walked valley is the lowest). Other flips are kept.
+    """
+    out = []
+    for start in flips:
+        k = int(np.flatnonzero(start != z)[0])
+        key = (k, float(start[k]))
+        if key not in outer:
+            out.append(start)
+        elif outer[key] is not None:
+            out.append(outer[key].z)  # type: ignore[union-attr]
+        elif not smooth:
+            out.append(start)
+    return out
 
 
 def jumps(side: Sequence[WalkPoint], index: int, chi2_hat: float, threshold: float) -> list[int]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -58,6 +58,24 @@ class End:
     beyond: bool = False
 
 
+@dataclass
+class Located:
+    """The root-findings and confirmations made on one branch, kept across its rounds.
+
+    A crossing bracketed by the same two points (with the same valley split) is the same
+    crossing, and a point confirmed once is confirmed: a branch that locates its ends again
+    after a re-walk re-fits only the brackets the re-walk changed. Keyed by the points'
+    identities (the values keep the points alive, so an identity is never reused).
+    """
+
+    roots: dict[tuple[float, int, int, bool], tuple[tuple[WalkPoint, WalkPoint], End, bool]] = (
+        field(default_factory=dict)
+    )
+    confirmed: dict[tuple[float, int], tuple[WalkPoint, WalkPoint | None]] = field(
+        default_factory=dict
+    )
+
+
 def rise_root(chi2: float, chi2_hat: float) -> float:
     """Return ``sqrt(chi2 - chi2_hat)``: linear in ``z`` for a parabolic profile."""
     return float(np.sqrt(max(chi2 - chi2_hat, 0.0)))
@@ -96,6 +114,7 @@ def locate(
     tolerance: float = 1e-3,
     outermost: bool = False,
     tangent: np.ndarray | None = None,
+    located: Located | None = None,
 ) -> End:
     """Locate the crossing of ``chi2_hat + threshold`` on one side by root-finding on re-fits.
 
@@ -133,6 +152,8 @@ def locate(
     tangent
         The path's Gauss-Newton direction at the estimate (:func:`fmuid.profiling.walk.
         path_tangent`): the switch test of the first step.
+    located
+        The branch's root-findings and confirmations so far (:class:`Located`, added to here).
 
     Returns
     -------
@@ -142,20 +163,32 @@ def locate(
     """
     side = list(side)
     confirms = 0
+    located = Located() if located is None else located
     moved = switches(side, index, problem.z_lower, problem.z_upper, tangent)
     while True:
         pair = bracket(side, index, chi2_hat, threshold, outermost)
         if pair is None:
             return End(None, refits=confirms)
         apart = any(side[k] is pair[1] for k in moved)
-        end, above = _root(
-            problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance, apart
-        )
+        key = (threshold, id(pair[0]), id(pair[1]), apart)
+        if key not in located.roots:
+            located.roots[key] = (
+                pair,
+                *_root(
+                    problem, index, chi2_hat, z_hat_i, threshold, pair, options, tolerance, apart
+                ),
+            )
+        _, end, above = located.roots[key]
         end = replace(end, refits=end.refits + confirms)
         if above or not pair[1].carried:
             break
-        confirmed = confirm(problem, index, pair[1], options, threshold)
-        confirms += 1
+        if (threshold, id(pair[1])) not in located.confirmed:
+            located.confirmed[(threshold, id(pair[1]))] = (
+                pair[1],
+                confirm(problem, index, pair[1], options, threshold),
+            )
+            confirms += 1
+        confirmed = located.confirmed[(threshold, id(pair[1]))][1]
         if confirmed is not None and confirmed.chi2 - chi2_hat >= threshold:
             break
         k = next(k for k, p in enumerate(side) if p is pair[1])
