@@ -10,6 +10,7 @@ augmentation. The reference is scipy's least-squares fit of that closed-loop equ
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from scipy.optimize import least_squares
 
 from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.discrepancy.catalogue import study_catalogue
-from fmuid.discrepancy.coupling import COUPLING_CHI2, settle_step, step_scale
+from fmuid.discrepancy.coupling import COUPLING_CHI2, FINEST, at_step, settle_step, step_scale
 from fmuid.discrepancy.scan import Scanner, augmented
 from fmuid.estimation.optimize import FitOptions, jacobian
 from fmuid.estimation.study import make_problem
@@ -78,3 +79,5 @@ def test_a_coarse_coupling_is_refined_until_the_fit_reaches_scipys(two_tanks_fmu
     assert step_scale(settled.problem) < 1.0
     assert abs(settled.chi2 - reference) < 2 * COUPLING_CHI2
     assert settled.values["c2_h1_u"] == pytest.approx(-Q / K, rel=0.05)
+    finest = replace(coarse, problem=at_step(coarse.problem, FINEST))
+    assert settle_step(scanner, finest, options) is finest  # the bound holds across steps

@@ -10,13 +10,15 @@ spurious effect to absorb.
 
 **The rule** (:func:`settle_step`): a model with fine-grid effects is accepted at a step only
 when halving the step moves its chi2 at the fitted values by at most :data:`COUPLING_CHI2`;
-otherwise the step is halved and the model re-fitted from its estimates, up to
-:data:`MAX_HALVINGS` times. For a first-order coupling the error of the kept step is then about
-twice that change, two chi2 units: a quarter of what a test of the family can see (a
-one-parameter likelihood ratio at the 0.5 % level needs 7.9). Halving stops when the change is
-that small, not when it is zero: below it, the change is the FMU's own step error and the fit's
-rounding. :func:`coupling_error` reports what is left,
-in sigmas of the predictions.
+otherwise the step is halved and the model re-fitted from its estimates, down to
+:data:`FINEST` (a later step of the forward selection starts from the step of the model it
+augments, so the bound holds for the whole selection). For a first-order coupling the error of
+the kept step is then about twice that change, two chi2 units: a quarter of what a test of the
+family can see (a one-parameter likelihood ratio at the 0.5 % level needs 7.9). Halving stops
+when the change is that small, not when it is zero: below it, the change is the FMU's own step
+error and the fit's rounding. At :data:`FINEST` the step stays, whatever the change:
+:func:`coupling_error` reports what is left, in sigmas of the predictions, and the verdict
+warns above one sigma.
 """
 
 from __future__ import annotations
@@ -40,7 +42,11 @@ COUPLING_CHI2 = 1.0
 """Largest change of chi2 at the fitted values, when the step is halved, of a step kept."""
 
 MAX_HALVINGS = 4
-"""Halvings of the fine step at most (the default step over 16)."""
+"""Halvings of the fine step at most, over every step of the forward selection (the finest
+step is the default one over 16: 64 steps per median sample interval)."""
+
+FINEST = 2.0**-MAX_HALVINGS
+"""The finest step scale."""
 
 
 def on_fine_grid(problem: Problem) -> AugmentedPredictor | None:
@@ -70,9 +76,9 @@ def settle_step(scanner: Scanner, fit: CandidateFit, options: FitOptions) -> Can
     simulation or re-fit that fails keeps the last fit (its step is then reported by
     :func:`coupling_error`).
     """
-    for _ in range(MAX_HALVINGS):
+    while True:
         predictor = on_fine_grid(fit.problem)
-        if predictor is None:
+        if predictor is None or predictor.step_scale <= FINEST:
             return fit
         finer = at_step(fit.problem, predictor.step_scale / 2)
         try:
