@@ -31,6 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from fmuid.discrepancy.augment import AugmentedPredictor
+from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.scan import CandidateFit, Scanner
 from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions
@@ -49,15 +50,17 @@ FINEST = 2.0**-MAX_HALVINGS
 """The finest step scale."""
 
 
+def acts_on_fine_grid(effect: Effect) -> bool:
+    """Whether the effect acts on the fine grid (feedback, input effects, output lags)."""
+    return effect.side in ("feedback", "input") or effect.effect == "output_lag"
+
+
 def on_fine_grid(problem: Problem) -> AugmentedPredictor | None:
     """Return the problem's predictor when an effect of it acts on the fine grid, else None."""
     predictor = problem.predictor
     if not isinstance(predictor, AugmentedPredictor):
         return None
-    fine = any(
-        e.side in ("feedback", "input") or e.effect == "output_lag" for e in predictor.effects
-    )
-    return predictor if fine else None
+    return predictor if any(map(acts_on_fine_grid, predictor.effects)) else None
 
 
 def at_step(problem: Problem, step_scale: float) -> Problem:
@@ -99,7 +102,6 @@ def settle_step(scanner: Scanner, fit: CandidateFit, options: FitOptions) -> Can
         if not refitted.fitted:
             return fit
         fit = refitted
-    return fit
 
 
 def step_scale(problem: Problem) -> float:
@@ -116,7 +118,7 @@ def coupling_error(problem: Problem, values: Mapping[str, float]) -> float | Non
     predictor = on_fine_grid(problem)
     if predictor is None:
         return None
-    half = AugmentedPredictor(predictor.base, predictor.effects, predictor.step_scale / 2)
+    half = at_step(problem, predictor.step_scale / 2).predictor
     worst = 0.0
     for i, exp in enumerate(problem.experiments):
         a = problem.simulate(dict(values), exp)

@@ -20,7 +20,7 @@ import numpy as np
 from scipy import stats
 
 from fmuid.discrepancy.augment import FINE
-from fmuid.discrepancy.coupling import settle_step, step_scale
+from fmuid.discrepancy.coupling import acts_on_fine_grid, settle_step, step_scale
 from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.result import AddedEstimate, EffectStep
 from fmuid.discrepancy.scan import CandidateFit, Scanner
@@ -166,7 +166,7 @@ def effect_steps(
     for s in steps:
         e = s.effect
         values = {n: estimates[n].estimate for n in e.names}
-        fine = e.side in ("feedback", "input") or e.effect == "output_lag"
+        fine = acts_on_fine_grid(e)
         out.append(
             EffectStep(
                 e.effect,
