@@ -1,24 +1,31 @@
 """The fine grid's step, chosen by what it does to chi2, and the check of the step kept.
 
 Effects on the fine grid (:mod:`.augment`) approximate on its step: feedback terms are closed
-around the FMU by an explicit coupling (:mod:`fmuid.model.feedback`: first order in the step for
-an FMU without input derivatives), clipping acts at the grid points. The default step (the
-median sample interval over :data:`~.augment.FINE`) can be too coarse for the dynamics: a
-two-tank process with a quadratic outflow fed back at a quarter of its 50 ms sample interval
-reads a chi2 30 units above the converged one at the true values, enough for a second,
-spurious effect to absorb.
+around the FMU by an explicit coupling (:mod:`fmuid.model.feedback`: second order in the step,
+from a linear extrapolation of the terms over the last step), clipping acts at the grid points.
+The default step (the median sample interval over :data:`~.augment.FINE`) can be too coarse for
+sharp or strong terms: a smooth sign narrower than the rate's change over a step (Coulomb
+friction), or a feedback whose own time constant is near the step. A coupling error left in the
+fit is enough for a second, spurious effect to absorb.
 
 **The rule** (:func:`settle_step`): a model with fine-grid effects is accepted at a step only
-when halving the step moves its chi2 at the fitted values by at most :data:`COUPLING_CHI2`;
-otherwise the step is halved and the model re-fitted from its estimates, down to
-:data:`FINEST` (a later step of the forward selection starts from the step of the model it
-augments, so the bound holds for the whole selection). For a first-order coupling the error of
-the kept step is then about twice that change, two chi2 units: a quarter of what a test of the
-family can see (a one-parameter likelihood ratio at the 0.5 % level needs 7.9). Halving stops
-when the change is that small, not when it is zero: below it, the change is the FMU's own step
-error and the fit's rounding. At :data:`FINEST` the step stays, whatever the change:
-:func:`coupling_error` reports what is left, in sigmas of the predictions, and the verdict
-warns above one sigma.
+when halving the step moves its chi2 at the fitted values by at most :data:`COUPLING_CHI2`
+times the fit's :func:`dispersion`; otherwise the step is halved and the model re-fitted from
+its estimates, down to :data:`FINEST` (a later step of the forward selection starts from the
+step of the model it augments, so the bound holds for the whole selection). For a second-order
+coupling the error of the kept step is then about a third of that change: under a quarter of
+what a test of the family can see (a one-parameter likelihood ratio at the 0.5 % level needs
+7.9). Halving stops when the change is that small, not when it is zero: below it, the change
+is the FMU's own step error and the fit's rounding.
+
+The dispersion (chi2 per degree of freedom, where above 1) is the unit of chi2 a fit can
+resolve when the model leaves much of the record unexplained: a textbook model of a real
+record, its sigmas the sensors' noise (EMPS: about 10,000 per degree of freedom), reads a
+change below one such unit as part of its misfit, not as a coupling error worth a 16-fold
+longer simulation. The kept step therefore does not depend on the scale of the sigmas.
+
+At :data:`FINEST` the step stays, whatever the change: :func:`coupling_error` reports what is
+left, in sigmas of the predictions, and the verdict warns above one sigma.
 """
 
 from __future__ import annotations
@@ -89,7 +96,7 @@ def settle_step(scanner: Scanner, fit: CandidateFit, options: FitOptions) -> Can
         except FmuidError as exc:
             log.info("%s: halved step not simulated (%s)", fit.candidate.label, exc)
             return fit
-        if moved <= COUPLING_CHI2:
+        if moved <= COUPLING_CHI2 * dispersion(fit):
             return fit
         log.info(
             "%s: halving the fine step moves chi2 by %.3g; step scale %g -> %g",
@@ -102,6 +109,12 @@ def settle_step(scanner: Scanner, fit: CandidateFit, options: FitOptions) -> Can
         if not refitted.fitted:
             return fit
         fit = refitted
+
+
+def dispersion(fit: CandidateFit) -> float:
+    """Return the fit's chi2 per degree of freedom where above 1, else 1 (module docstring)."""
+    dof = max(fit.problem.n_data - fit.problem.n_free, 1)
+    return max(fit.chi2 / dof, 1.0)
 
 
 def step_scale(problem: Problem) -> float:

@@ -8,8 +8,10 @@ step's start time): its error shrinks with the step, which :class:`Feedback` bou
 check it by halving the step (``fmuid.discrepancy`` reports that check).
 
 FMUs that take input derivatives get the measured input's slope plus the feedback's slope over
-the previous step (a linear extrapolation, second order in the step); the others hold the
-value of the step's start time (first order). Rates and slopes are differences over at least
+the previous step (a linear extrapolation, second order in the step); the others see the exact
+values at the step's start time (for outputs read there) and then hold, over the step, that
+line's value at the step's midpoint (also second order: the held value's integral over the
+step is the extrapolated line's). Rates and slopes are differences over at least
 half the step (:attr:`Feedback.min_gap`): a grid point nearer the last one (an input sample
 between fine-grid points) keeps the last ones.
 
@@ -216,9 +218,14 @@ def run_feedback(
             result[rows] = out
         if k == last:
             break
+        h = times[k + 1] - t
+        if derivatives is None:
+            fill((values[k] + g + 0.5 * h * (slopes[k] + trend)).tolist())
+            if (status := set_inputs()) > 1:  # fmi2SetReal & co.
+                raise instance.fail(set_name, status, f"for the inputs at t = {t + h / 2} s")
         if k == 0 or update:
             previous, g_prev, t_prev = level, g, t
-        status = step(t, times[k + 1] - t, 1)  # fmi2DoStep (fmi3DoStep)
+        status = step(t, h, 1)  # fmi2DoStep (fmi3DoStep)
         if status > 1:
             return result, instance.step_outcome(status, t)
     return result, None

@@ -199,7 +199,8 @@ static int get_sources(FmuidLoop *L, FmuidTerms *F) {
 /*
  * The closed loop: at every grid point read the sources, add the terms to the measured inputs,
  * set them (and their slopes plus the terms' trend over the previous step), read the outputs,
- * step. 0 when it ran to the end, else a status (STATUS_DIVERGED for a non-finite term).
+ * step; an FMU without input derivatives holds the line's midpoint value over the step instead.
+ * 0 when it ran to the end, else a status (STATUS_DIVERGED for a non-finite term).
  */
 int fmuid_feedback(FmuidLoop *L, FmuidTerms *F) {
     double *u = L->work, *y = L->work + L->n_in;
@@ -242,12 +243,19 @@ int fmuid_feedback(FmuidLoop *L, FmuidTerms *F) {
         status = store_rows(L, k, y);
         if (status > 1) return failed(L, status, k, CALL_GET, t);
         if (k == last) break;
+        double h = L->times[k + 1] - t;
+        if (!L->use_derivatives) {
+            for (long i = 0; i < L->n_in; i++)
+                u[i] = v[i] + F->g[i] + 0.5 * h * (s[i] + F->trend[i]);
+            status = set_values(L, L->in_refs, L->n_in, u);
+            if (status > 1) return failed(L, status, k, CALL_SUB_SET, t + h / 2);
+        }
         if (k == 0 || update) {
             for (long j = 0; j < F->n_src; j++) F->previous[j] = F->level[j];
             for (long i = 0; i < L->n_in; i++) F->g_prev[i] = F->g[i];
             t_prev = t;
         }
-        status = step(L, t, L->times[k + 1] - t);
+        status = step(L, t, h);
         if (status > 1) return failed(L, status, k, CALL_STEP, t);
     }
     return 0;
