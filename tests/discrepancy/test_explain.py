@@ -94,3 +94,11 @@ def test_several_effects_and_held_out_errors_are_in_the_verdict() -> None:
     text = found.verdict()
     assert text.startswith("input_offset, then feedback_polynomial explain the mismatch")
     assert "held-out RMS simulation error x 0.0071 -> 0.00098 (test.csv)" in text
+
+
+def test_a_misfit_well_above_the_noise_widens_the_reading_of_the_intervals() -> None:
+    sentence = explain.misfit_scale(4_000.0 * 10, 10, residuals_pass=False)
+    assert "chi2 4e+03 per degree of freedom" in sentence
+    assert "63 times wider" in sentence  # sqrt(4000)
+    assert explain.misfit_scale(4_000.0 * 10, 10, residuals_pass=True) == ""
+    assert explain.misfit_scale(1.5 * 10, 10, residuals_pass=False) == ""

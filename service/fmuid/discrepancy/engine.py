@@ -354,6 +354,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
             rival,
             residuals_pass,
         )
+        + explain.misfit_scale(final_fit.chi2, fit.n_data - aug.n_free, residuals_pass)
         + explain.settle(tests)
         + explain.held_out(checked)
         + explain.levels(where["levels"]),

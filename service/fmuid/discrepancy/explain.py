@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -93,6 +94,24 @@ def explained(
             "for physics that the catalogue lacks."
         )
     return out
+
+
+MISFIT_SCALE = 2.0
+"""Chi2 per degree of freedom of a final model from which the verdict says its intervals are
+narrower than its misfit warrants (residuals about 1.4 times the stated noise and more)."""
+
+
+def misfit_scale(chi2: float, dof: int, residuals_pass: bool) -> str:
+    """Sentence on a final model whose misfit is well above the stated noise, else ''."""
+    per_dof = chi2 / max(dof, 1)
+    if residuals_pass or per_dof < MISFIT_SCALE:
+        return ""
+    return (
+        f" The final model leaves chi2 {per_dof:.3g} per degree of freedom: its residuals are "
+        f"about {math.sqrt(per_dof):.2g} times the stated noise, and the intervals, which take the "
+        "sigmas for the whole error, are narrower than that misfit warrants (scaled by it, "
+        f"{math.sqrt(per_dof):.2g} times wider)."
+    )
 
 
 def held_out(entries: Sequence[ValidationEntry]) -> str:
