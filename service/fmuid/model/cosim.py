@@ -7,11 +7,12 @@ At each communication point the inputs for that time are set before the outputs 
 direct-feedthrough output sees the input of the same instant. Between points the inputs are
 linear: FMUs that accept input derivatives (FMI 2.0 ``canInterpolateInputs``) get the slope of
 each interval; the others cross each interval where some input changes in equal sub-steps of
-at most ``input_step`` seconds, each holding the linear input's value at the sub-step's
-midpoint. The midpoint value makes the held input's integral over every sub-step exact, so the
-states' error is second order in the sub-step ``d`` (a local error of about ``d**3 / 12``
-times the input's slope and the system's rate) where the start value gave a first-order lag of
-half a sub-step. At the communication points the FMU sees the exact input values.
+at most ``input_step`` seconds (at most :data:`~fmuid.model.base.MAX_SUB_STEPS` of them),
+each holding the linear input's value at the sub-step's midpoint. The midpoint value makes the
+held input's integral over every sub-step exact, so the states' error is second order in the
+sub-step ``d`` (a local error of about ``d**3 / 12`` times the input's slope and the system's
+rate) where the start value gave a first-order lag of half a sub-step. At the communication
+points the FMU sees the exact input values.
 
 The loop runs in compiled code (:mod:`fmuid.model.native`) where it can (Real/Float64 inputs
 and outputs, gcc at hand); the Python loop here is the reference it is tested against.
@@ -23,6 +24,7 @@ import math
 
 import numpy as np
 
+from fmuid.model.base import MAX_SUB_STEPS
 from fmuid.model.channels import Channels
 from fmuid.model.instance import Instance
 from fmuid.model.native import run_native_cosimulation
@@ -115,11 +117,11 @@ def _sub_steps(
 ) -> float | None:
     """Cross ``[t, t + h]`` in equal sub-steps of at most ``input_step``.
 
-    Each sub-step holds the linear input's value at its midpoint; returns the stop time if the
-    FMU asks to stop, else None.
+    At most :data:`~fmuid.model.base.MAX_SUB_STEPS` of them. Each sub-step holds the linear
+    input's value at its midpoint; returns the stop time if the FMU asks to stop, else None.
     """
     step = instance.stepper()
-    n = max(1, math.ceil(h / input_step - 1e-9))
+    n = min(max(1, math.ceil(h / input_step - 1e-9)), MAX_SUB_STEPS)
     for j in range(n):
         t_j = t + h * j / n
         t_mid = t + h * (j + 0.5) / n

@@ -53,6 +53,7 @@ typedef struct {
     const int *orders;            /* n_cont ones, for fmi2SetRealInputDerivatives */
     int use_derivatives;
     double sub_step;              /* longest sub-step [s] of a moving interval */
+    long max_sub_steps;           /* most sub-steps of a moving interval */
     long n_out;
     const unsigned *out_refs;
     const long *row_start;        /* rows read at grid point k: rows[row_start[k]:row_start[k+1]] */
@@ -133,6 +134,7 @@ static int sub_steps(FmuidLoop *L, long k, double t, double h) {
     long n = (long)ceil(h / L->sub_step - 1e-9);
     int status;
     if (n < 1) n = 1;
+    if (n > L->max_sub_steps) n = L->max_sub_steps;
     for (long j = 0; j < n; j++) {
         double t_j = t + h * (double)j / (double)n;
         double t_mid = t + h * ((double)j + 0.5) / (double)n;

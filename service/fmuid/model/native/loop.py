@@ -14,6 +14,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from fmuid.model.base import MAX_SUB_STEPS
 from fmuid.model.channels import Channels
 from fmuid.model.instance import Instance
 from fmuid.model.native.build import native_library
@@ -49,6 +50,7 @@ class Loop(ctypes.Structure):
         ("orders", _P),
         ("use_derivatives", ctypes.c_int),
         ("sub_step", ctypes.c_double),
+        ("max_sub_steps", _LONG),
         ("n_out", _LONG),
         ("out_refs", _P),
         ("row_start", _P),
@@ -151,6 +153,7 @@ def _new_loop(
         _pointer(orders),
         int(derivatives),
         math.inf if sub_step is None else sub_step,
+        MAX_SUB_STEPS,
         outputs.size,
         _pointer(outputs.refs),
         _pointer(grid.row_start),
