@@ -12,8 +12,10 @@ from scipy.integrate import solve_ivp
 from fmuid.model.simulator import Simulator
 
 M, K, B = 1.1, 4.4, 1.6
-RAMP_T = np.array([0.0, 0.5, 2.5, 6.0])
-RAMP_F = np.array([0.0, 0.0, 40.0, 40.0])
+RAMP_T = np.concatenate(([0.0], np.arange(0.5, 2.5 + 1e-9, 0.25), [6.0]))
+"""The ramp sampled every 0.25 s, so that its sub-steps (at most 8 per sample interval) are
+``input_step``'s."""
+RAMP_F = np.interp(RAMP_T, [0.0, 0.5, 2.5, 6.0], [0.0, 0.0, 40.0, 40.0])
 T_OUT = np.round(np.arange(0.0, 6.0 + 1e-9, 0.25), 10)
 
 

@@ -33,18 +33,21 @@ def test_step_response_is_the_closed_form(first_order_fmu: Path) -> None:
         np.testing.assert_allclose(y, _step(k, tau), rtol=0, atol=1e-13)
 
 
-@pytest.mark.parametrize("input_step", [INPUT_STEP, 0.05])
-def test_ramp_is_held_at_sub_step_midpoints(first_order_fmu: Path, input_step: float) -> None:
+@pytest.mark.parametrize("samples", [2, 21])
+def test_ramp_is_held_at_sub_step_midpoints(first_order_fmu: Path, samples: int) -> None:
     """No input derivatives: each sub-step holds the ramp's midpoint value, so the output
     follows the exact ramp response K (t - tau + tau exp(-t/tau)) to second order, within
     K u' d**2 / (12 tau) for the ramp's slope u' and sub-step d (the steady error of a local
-    error K u' d**3 / (12 tau**2) per sub-step). The sub-step is ``input_step``, or a 0.1 s
-    output interval over MAX_SUB_STEPS where that is longer (1 ms asks for 100)."""
-    sim = Simulator(first_order_fmu, input_step=input_step)
+    error K u' d**3 / (12 tau**2) per sub-step). The sub-step is INPUT_STEP, or the input's
+    sample interval over MAX_SUB_STEPS where that is longer, and at most the 0.1 s between
+    outputs: the ramp given by its 2 end samples is held once per output interval, the ramp
+    sampled at every output (0.1 s) over 8 sub-steps of 12.5 ms."""
+    sim = Simulator(first_order_fmu)
     t = T[T <= 2.0]
-    y = sim.simulate({}, np.array([0.0, 2.0]), {"u": np.array([0.0, 2.0])}, t, ["y"])[:, 0]
+    t_in = np.linspace(0.0, 2.0, samples)
+    y = sim.simulate({}, t_in, {"u": t_in}, t, ["y"])[:, 0]
     exact = K * (t - TAU + TAU * np.exp(-t / TAU))
-    d = max(input_step, 0.1 / MAX_SUB_STEPS)
+    d = min(0.1, max(INPUT_STEP, (t_in[1] - t_in[0]) / MAX_SUB_STEPS))
     bound = K * 1.0 * d**2 / (12 * TAU)
     error = np.abs(exact - y)
     assert np.max(error) <= bound * 1.05

@@ -12,10 +12,11 @@ INPUT_STEP = 1e-3
 an input (the linear input's value at each sub-step's midpoint)."""
 
 MAX_SUB_STEPS = 8
-"""Most sub-steps per input interval, whatever :data:`INPUT_STEP` asks: the hold's error is
-second order in the sub-step, so 8 leave 1/64 of a single hold's, while the input itself is
-only known at its samples (its linear interpolation is second order in the sample interval). A
-process sampled every 4 s would otherwise cost 4,000 FMU steps per sample."""
+"""Most sub-steps per input sample interval, whatever :data:`INPUT_STEP` asks (a sub-step is
+at least the sample interval over this): the hold's error is second order in the sub-step, so
+8 leave 1/64 of a single hold's, while the input itself is only known at its samples (its
+linear interpolation is second order in the sample interval). A process sampled every 4 s
+would otherwise cost 4,000 FMU steps per sample."""
 
 
 def as_model(fmu: FmuModel | str | Path, interface: str | None = None) -> FmuModel:
@@ -63,5 +64,5 @@ class SimulatorBase:
             return "co-simulation with input derivatives (fmi2SetRealInputDerivatives)"
         return (
             f"co-simulation, linear inputs held over sub-steps of at most {self.input_step:g} s "
-            f"(at most {MAX_SUB_STEPS} per input interval) at each sub-step's midpoint value"
+            f"(at most {MAX_SUB_STEPS} per input sample interval) at each sub-step's midpoint value"
         )

@@ -7,11 +7,12 @@ At each communication point the inputs for that time are set before the outputs 
 direct-feedthrough output sees the input of the same instant. Between points the inputs are
 linear: FMUs that accept input derivatives (FMI 2.0 ``canInterpolateInputs``) get the slope of
 each interval; the others cross each interval where some input changes in equal sub-steps of
-at most ``input_step`` seconds (at most :data:`~fmuid.model.base.MAX_SUB_STEPS` of them),
-each holding the linear input's value at the sub-step's midpoint. The midpoint value makes the
-held input's integral over every sub-step exact, so the states' error is second order in the
-sub-step ``d`` (a local error of about ``d**3 / 12`` times the input's slope and the system's
-rate) where the start value gave a first-order lag of half a sub-step. At the communication
+at most ``input_step`` seconds, and at most :data:`~fmuid.model.base.MAX_SUB_STEPS` per input
+sample interval (a sub-step of at least that interval over it), each holding the linear
+input's value at the sub-step's midpoint. The midpoint value makes the held input's integral
+over every sub-step exact, so the states' error is second order in the sub-step ``d`` (a local
+error of about ``d**3 / 12`` times the input's slope and the system's rate) where the start
+value gave a first-order lag of half a sub-step. At the communication
 points the FMU sees the exact input values.
 
 The loop runs in compiled code (:mod:`fmuid.model.native`) where it can (Real/Float64 inputs
@@ -70,6 +71,7 @@ def run_cosimulation(
     values, slopes = plan.value.tolist(), plan.slope.tolist()
     sub_step = math.inf if input_step is None else input_step
     moving = [False] * len(times) if input_step is None else np.any(plan.slope, axis=1).tolist()
+    segment = plan.segment.tolist()
     moving_inputs = inputs.subset(inputs.continuous)
     fill, set_inputs, set_name = instance.bind_set(inputs)
     get_outputs, out, get_name = instance.bind_get(outputs)
@@ -98,7 +100,8 @@ def run_cosimulation(
         else:
             value = [values[k][i] for i in inputs.continuous]
             slope = [slopes[k][i] for i in inputs.continuous]
-            stopped = _sub_steps(instance, moving_inputs, value, slope, t, h, sub_step)
+            longest = max(sub_step, segment[k] / MAX_SUB_STEPS)
+            stopped = _sub_steps(instance, moving_inputs, value, slope, t, h, longest)
         if stopped is not None:
             if rows_at[k + 1] and stopped >= times[k + 1] - 1e-12 * max(1.0, abs(stopped)):
                 result[rows_at[k + 1]] = instance.read(outputs, times[k + 1])
@@ -117,11 +120,11 @@ def _sub_steps(
 ) -> float | None:
     """Cross ``[t, t + h]`` in equal sub-steps of at most ``input_step``.
 
-    At most :data:`~fmuid.model.base.MAX_SUB_STEPS` of them. Each sub-step holds the linear
-    input's value at its midpoint; returns the stop time if the FMU asks to stop, else None.
+    Each sub-step holds the linear input's value at its midpoint; returns the stop time if the
+    FMU asks to stop, else None.
     """
     step = instance.stepper()
-    n = min(max(1, math.ceil(h / input_step - 1e-9)), MAX_SUB_STEPS)
+    n = max(1, math.ceil(h / input_step - 1e-9))
     for j in range(n):
         t_j = t + h * j / n
         t_mid = t + h * (j + 0.5) / n

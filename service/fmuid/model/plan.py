@@ -18,13 +18,15 @@ class GridArrays(NamedTuple):
     """A plan as contiguous arrays, for the native master loop.
 
     ``rows[row_start[k]:row_start[k + 1]]`` are the rows read at grid point ``k``; ``moving``
-    says whether some input changes over each interval.
+    says whether some input changes over each interval, ``segment`` the length of the input
+    sample interval each grid interval lies in.
     """
 
     times: np.ndarray
     value: np.ndarray
     slope: np.ndarray
     moving: np.ndarray
+    segment: np.ndarray
     row_start: np.ndarray
     rows: np.ndarray
 
@@ -84,6 +86,16 @@ class RunPlan:
         return np.isin(self.grid, self.input_time)
 
     @cached_property
+    def segment(self) -> np.ndarray:
+        """Length [s] of the input sample interval each grid interval lies in (inf outside)."""
+        mid = 0.5 * (self.grid[:-1] + self.grid[1:])
+        j = np.searchsorted(self.input_time, mid, side="right") - 1
+        inside = (j >= 0) & (j < self.input_time.size - 1)
+        jc = np.clip(j, 0, max(self.input_time.size - 2, 0))
+        length = self.input_time[np.minimum(jc + 1, self.input_time.size - 1)] - self.input_time[jc]
+        return np.append(np.where(inside, length, np.inf), np.inf)
+
+    @cached_property
     def arrays(self) -> GridArrays:
         """The plan as contiguous float64, uint8 and int64 arrays (made once per plan)."""
         return GridArrays(
@@ -91,6 +103,7 @@ class RunPlan:
             np.ascontiguousarray(self.value, dtype=np.float64),
             np.ascontiguousarray(self.slope, dtype=np.float64),
             np.ascontiguousarray(np.any(self.slope, axis=1), dtype=np.uint8),
+            np.ascontiguousarray(self.segment, dtype=np.float64),
             np.ascontiguousarray(self.row_start, dtype=np.int64),
             np.ascontiguousarray(self.rows, dtype=np.int64),
         )

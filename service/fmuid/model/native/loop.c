@@ -45,6 +45,7 @@ typedef struct {
     const double *value;          /* inputs at each grid point, n_times x n_in */
     const double *slope;          /* input slopes over each interval, n_times x n_in */
     const unsigned char *moving;  /* sub-step this interval (NULL: never) */
+    const double *segment;        /* length [s] of the input sample interval it lies in */
     long n_in;
     const unsigned *in_refs;
     long n_cont;                  /* continuous inputs: sub-stepped or given derivatives */
@@ -53,7 +54,7 @@ typedef struct {
     const int *orders;            /* n_cont ones, for fmi2SetRealInputDerivatives */
     int use_derivatives;
     double sub_step;              /* longest sub-step [s] of a moving interval */
-    long max_sub_steps;           /* most sub-steps of a moving interval */
+    long max_sub_steps;           /* most sub-steps per input sample interval */
     long n_out;
     const unsigned *out_refs;
     const long *row_start;        /* rows read at grid point k: rows[row_start[k]:row_start[k+1]] */
@@ -126,15 +127,16 @@ static int failed(FmuidLoop *L, int status, long k, int call, double t) {
 
 /*
  * Cross the moving interval [t, t + h] in n equal sub-steps, each holding the continuous
- * inputs' linear value at the sub-step's midpoint.
+ * inputs' linear value at the sub-step's midpoint: sub-steps of at most sub_step seconds, or
+ * of the input sample interval over max_sub_steps where that is longer.
  */
 static int sub_steps(FmuidLoop *L, long k, double t, double h) {
     const double *v = L->value + k * L->n_in, *s = L->slope + k * L->n_in;
     double *u = L->work;
-    long n = (long)ceil(h / L->sub_step - 1e-9);
+    double longest = fmax(L->sub_step, L->segment[k] / (double)L->max_sub_steps);
+    long n = (long)ceil(h / longest - 1e-9);
     int status;
     if (n < 1) n = 1;
-    if (n > L->max_sub_steps) n = L->max_sub_steps;
     for (long j = 0; j < n; j++) {
         double t_j = t + h * (double)j / (double)n;
         double t_mid = t + h * ((double)j + 0.5) / (double)n;
