@@ -106,3 +106,25 @@ def test_log_and_linear_scaling_round_trip(msd_fmu, m, k, b):
     for name, v in values.items():
         assert back[name] == pytest.approx(v, rel=1e-12, abs=1e-12)
     assert problem.to_z(values)[0] == pytest.approx(np.log10(m))
+
+
+@pytest.mark.slow
+def test_slow_generations_are_evaluated_side_by_side_with_the_same_result(msd_fmu, monkeypatch):
+    from fmuid.engine.run import open_engine
+    from fmuid.estimation import optimize
+
+    data = msd_data("step.csv", STEP, 0.05, seed=2)
+    problem = make_problem(msd_fmu, [data], msd_spec({"m": 4.5, "k": 0.05, "b": 0.02}))
+    options = optimize.FitOptions(pop_size=8, generations=4)
+    alone = optimize.global_start(problem, 1, options)
+    monkeypatch.setattr(optimize, "SLOW_RUN", 0.0)  # every run counts as slow
+    shares = []
+    with open_engine(problem.model, workers=2) as engine:
+
+        def mapper(fn, *iterables):
+            shares.append(len(iterables[1]))
+            return engine.map(fn, *iterables)
+
+        side = optimize.global_start(problem, 1, options, mapper=mapper)
+    np.testing.assert_array_equal(side, alone)
+    assert shares == [optimize.GA_TASKS] * (options.generations - 1)  # the first timed here

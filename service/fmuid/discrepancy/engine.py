@@ -189,7 +189,10 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     """Diagnose the run's problem (:func:`diagnose_problem`'s steps)."""
     problem, opts = run.problem, run.opts
     if fit is None:
-        fit = fit_problem(problem, global_search=problem.spec.global_search, seed=problem.spec.seed)
+        spec = problem.spec
+        fit = fit_problem(
+            problem, global_search=spec.global_search, seed=spec.seed, mapper=run.mapper
+        )
     cands = study_catalogue(problem, fit.estimates)
     run.total = 3 * len(cands) + 5
     run.lap("base fit")

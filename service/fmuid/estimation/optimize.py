@@ -25,6 +25,17 @@ log = logging.getLogger(__name__)
 #: Penalty residual per sample when a simulation fails inside an optimiser.
 FAILED_RESIDUAL = 1e4
 
+SLOW_RUN = 0.02
+"""Seconds per simulation from which the genetic algorithm's later generations are evaluated
+side by side by a mapper: below it a task's overhead (the problem pickled to a worker) would
+cost about what it saves."""
+
+GA_TASKS = 8
+"""Tasks per generation evaluated side by side (each a share of the population)."""
+
+Mapper = Callable[..., list]
+"""``mapper(fn, *iterables)``: the results of ``fn`` over the iterables, in order."""
+
 
 @dataclass(frozen=True)
 class FitOptions:
@@ -163,16 +174,34 @@ class _Stopped(Exception):
         self.z, self.chi2 = z.copy(), chi2
 
 
+def chi2_of(problem: Problem, zs: np.ndarray) -> list[float]:
+    """Chi2 at each row of ``zs`` (a failed simulation: its penalty); the same in any process."""
+    return [float(r @ r) for r in (safe_residuals(problem, z) for z in zs)]
+
+
 class _GaProblem(PymooProblem):
-    def __init__(self, problem: Problem):
+    """The fit as pymoo's problem; a generation is evaluated side by side once runs are slow.
+
+    The first generation runs here and times the simulations; from :data:`SLOW_RUN` seconds per
+    run on, ``mapper`` evaluates the later ones in :data:`GA_TASKS` shares. Each chi2 is the
+    same wherever it is computed, so the search does not depend on it.
+    """
+
+    def __init__(self, problem: Problem, mapper: Mapper | None):
         super().__init__(n_var=problem.n_free, n_obj=1, xl=problem.z_lower, xu=problem.z_upper)
         self.problem = problem
+        self.mapper = mapper
+        self.side_by_side = False
 
     def _evaluate(self, x: np.ndarray, out: dict, *args: object, **kwargs: object) -> None:
-        f = np.empty(len(x))
-        for k, z in enumerate(x):
-            r = safe_residuals(self.problem, z)
-            f[k] = float(r @ r)
+        if self.side_by_side and self.mapper is not None:
+            shares = np.array_split(x, min(len(x), GA_TASKS))
+            f = np.concatenate(self.mapper(chi2_of, [self.problem] * len(shares), shares))
+        else:
+            t0 = time.perf_counter()
+            f = np.array(chi2_of(self.problem, x))
+            slow = (time.perf_counter() - t0) / max(len(x), 1) >= SLOW_RUN
+            self.side_by_side = self.mapper is not None and slow
         out["F"] = f
 
 
@@ -181,8 +210,12 @@ def global_start(
     seed: int,
     options: FitOptions = FitOptions(),
     progress: ProgressCallback | None = None,
+    mapper: Mapper | None = None,
 ) -> np.ndarray:
-    """Best point of a seeded genetic algorithm over the bounds box in fitted coordinates."""
+    """Best point of a seeded genetic algorithm over the bounds box in fitted coordinates.
+
+    ``mapper`` evaluates generations side by side where simulations are slow (:class:`_GaProblem`).
+    """
     pop = max(options.pop_size, 8 * problem.n_free)
     done = [0]
 
@@ -193,7 +226,7 @@ def global_start(
 
     algorithm = GA(pop_size=pop, eliminate_duplicates=True)
     res = pymoo_minimize(
-        _GaProblem(problem),
+        _GaProblem(problem, mapper),
         algorithm,
         ("n_gen", options.generations),
         seed=seed,
@@ -211,6 +244,7 @@ def fit_problem(
     seed: int = 0,
     options: FitOptions = FitOptions(),
     progress: ProgressCallback | None = None,
+    mapper: Mapper | None = None,
 ) -> FitResult:
     """Fit the free parameters: GA global start (optional), then trust-region refinement.
 
@@ -229,6 +263,9 @@ def fit_problem(
         Sizes and tolerances.
     progress
         Receives progress events.
+    mapper
+        Evaluates the genetic algorithm's generations side by side where simulations are slow
+        (a task engine's ``map``); the fit is the same without it.
 
     Returns
     -------
@@ -237,7 +274,9 @@ def fit_problem(
     """
     t0 = time.perf_counter()
     with counting() as count:
-        z, chi2, message, jac = _best_fit(problem, start, global_search, seed, options, progress)
+        z, chi2, message, jac = _best_fit(
+            problem, start, global_search, seed, options, progress, mapper
+        )
     cost = Cost(count.simulations, time.perf_counter() - t0)
     return make_fit_result(problem, z, chi2, jac, message, global_search, cost)
 
@@ -249,12 +288,13 @@ def _best_fit(
     seed: int,
     options: FitOptions,
     progress: ProgressCallback | None,
+    mapper: Mapper | None,
 ) -> tuple[np.ndarray, float, str, np.ndarray]:
     """Refine from each start (the global search's best first); return the best and its Jacobian."""
     z_start = problem.to_z(start) if start is not None else problem.to_z_array(problem.start)
     starts = [z_start]
     if global_search:
-        starts.insert(0, global_start(problem, seed, options, progress))
+        starts.insert(0, global_start(problem, seed, options, progress, mapper))
     best: tuple[np.ndarray, float, str] | None = None
     errors = []
     for k, z0 in enumerate(starts, 1):
