@@ -153,3 +153,17 @@ def test_default_space_follows_the_study_data():
     assert space.duration == (8.0, 8.0) and space.longest_test == 8.0
     assert space.rates_hz == [pytest.approx(5.0)]
     assert space.outputs["x"].sigma == 0.005
+
+
+def test_the_default_space_of_a_slowly_sampled_process_is_below_its_nyquist():
+    """A record sampled every 4 s (a process): every frequency range is ordered and below the
+    Nyquist frequency's half (the former 0.05 Hz floor exceeded the multisine's 0.025 Hz top)."""
+    t = np.arange(0.0, 4096.0, 4.0)
+    exp = experiment_from_arrays("p.csv", t, {"f": np.where(t > 100, 2.0, 0.0), "x": 1e-3 * t})
+    space = default_space(Problem(builtin_fmu("msd"), [exp], spec_from_json(json.dumps(SPEC))))
+    nyquist = 0.5 / 4.0
+    for family in ("chirp", "multisine"):
+        for name in ("f0", "f1", "f_min", "f_max"):
+            if name in space.families[family]:
+                low, high = space.families[family][name]
+                assert 0 < low <= high <= nyquist / 2, (family, name)

@@ -324,9 +324,11 @@ def _best(
 def default_space(problem: Problem) -> Space:
     """Return a space like the study's data: input, amplitude, longest test, rate, noise.
 
-    Step, chirp (0.05 Hz to the sensors' Nyquist / 4) and multisine tests up to the largest
-    absolute input of the data, as long as the longest experiment, at the data's median rate,
-    measuring the study's outputs with their resolved sigma.
+    Step, chirp (from 0.05 Hz, or from an eighth of the top frequency where that is below
+    0.2 Hz, to the sensors' Nyquist / 4, at least 0.1 Hz but never above Nyquist / 2)
+    and multisine tests up to the largest absolute input of the data, as long as the longest
+    experiment, at the data's median rate, measuring the study's outputs with their resolved
+    sigma. A process sampled every 4 s gets frequencies from 0.0078 to 0.0625 Hz.
     """
     name = problem.inputs[0]
     amp = max(float(np.max(np.abs(e.input_samples(name)[1]))) for e in problem.experiments) or 1.0
@@ -335,19 +337,20 @@ def default_space(problem: Problem) -> Space:
         [np.diff(e.time[m]) for e, ms in zip(problem.experiments, problem.masks) for m in ms]
     )
     rate = float(f"{1.0 / float(np.median(steps)):.6g}")
-    f_top = max(rate / 8.0, 0.1)
+    f_top = min(max(rate / 8.0, 0.1), rate / 4.0)
+    f_low = 0.05 if f_top >= 0.2 else f_top / 8.0
     sigma = problem.representative_sigma()
     doc = {
         "input": name,
         "families": {
             "step": {"amplitude": [-amp, amp], "time": [0.1 * longest, 0.5 * longest]},
             "chirp": {
-                "f0": [0.05, f_top / 2],
+                "f0": [f_low, f_top / 2],
                 "f1": [f_top / 2, f_top],
                 "amplitude": [0.5 * amp, amp],
             },
             "multisine": {
-                "f_min": [0.05, f_top / 4],
+                "f_min": [f_low, f_top / 4],
                 "f_max": [f_top / 2, f_top],
                 "amplitude": [0.5 * amp, amp],
                 "tones": [2, 6],
