@@ -36,15 +36,13 @@ from fmuid.discrepancy.effects import Effect, OutputSaturation
 from fmuid.discrepancy.knowledge import AddedParameter
 from fmuid.discrepancy.threshold import ClipNull, LevelsNull, ThresholdNull, unit_columns
 from fmuid.errors import FmuidError
-from fmuid.estimation.optimize import FitOptions, refine, safe_residuals
+from fmuid.estimation.optimize import FitOptions, Mapper, refine, safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
 
 log = logging.getLogger(__name__)
 
 T = TypeVar("T")
-Mapper = Callable[..., list[Any]]
-"""``mapper(fn, *iterables)``: the results of ``fn`` over the iterables, in order."""
 
 GRID_POINTS = 7
 """Grid values of a one-parameter candidate's added parameter in the screen."""

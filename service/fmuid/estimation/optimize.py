@@ -6,6 +6,7 @@ import logging
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from pymoo.algorithms.soo.nonconvex.ga import GA
@@ -33,7 +34,7 @@ cost about what it saves."""
 GA_TASKS = 8
 """Tasks per generation evaluated side by side (each a share of the population)."""
 
-Mapper = Callable[..., list]
+Mapper = Callable[..., list[Any]]
 """``mapper(fn, *iterables)``: the results of ``fn`` over the iterables, in order."""
 
 
@@ -201,7 +202,7 @@ class _GaProblem(PymooProblem):
             t0 = time.perf_counter()
             f = np.array(chi2_of(self.problem, x))
             slow = (time.perf_counter() - t0) / max(len(x), 1) >= SLOW_RUN
-            self.side_by_side = self.mapper is not None and slow
+            self.side_by_side = slow and self.mapper is not None
         out["F"] = f
 
 
