@@ -55,6 +55,26 @@ def test_ramp_is_held_at_sub_step_midpoints(first_order_fmu: Path, samples: int)
     assert "midpoint" in sim.input_handling
 
 
+@pytest.mark.parametrize("native", [True, False])
+def test_a_finer_resampling_of_the_input_keeps_its_sub_steps(
+    first_order_fmu: Path, native: bool
+) -> None:
+    """The ramp sampled every 0.1 s and the same ramp resampled every 0.025 s (as the diagnosis
+    hands inputs to an FMU without input derivatives): told the original sample times, the
+    simulator crosses both in the same 12.5 ms sub-steps, so the outputs agree to rounding;
+    not told, it holds the resampled ramp over sub-steps 4 times shorter (a smaller hold
+    error, a different result)."""
+    sim = Simulator(first_order_fmu)
+    sim.native = native
+    t = T[T <= 2.0]
+    fine = np.linspace(0.0, 2.0, 4 * (t.size - 1) + 1)
+    coarse = sim.simulate({}, t, {"u": t}, t, ["y"])[:, 0]
+    told = sim.simulate({}, fine, {"u": fine}, t, ["y"], sample_time=t)[:, 0]
+    np.testing.assert_allclose(told, coarse, rtol=0, atol=1e-12)
+    untold = sim.simulate({}, fine, {"u": fine}, t, ["y"])[:, 0]
+    assert np.max(np.abs(untold - coarse)) > 1e-5
+
+
 @pytest.fixture(scope="module")
 def lag_data() -> Experiment:
     noise = np.random.default_rng(3).normal(0.0, SIGMA, T.size)

@@ -96,7 +96,9 @@ class AugmentedPredictor:
 
         A co-simulation FMU without input derivatives holds each input over a sub-step, with an
         error second order in the sub-step; the base model and every augmentation must cross the
-        same sub-steps, or a candidate's statistic measures the change of that error.
+        same sub-steps, or a candidate's statistic measures the change of that error. The
+        simulator is told the data's input sample times, so the fine grid bounds the sub-steps
+        per sample interval as the data's own samples do (it does not multiply them).
         """
         model = self.base.model
         return model.is_cosimulation and not model.can_interpolate_inputs
@@ -150,6 +152,7 @@ class AugmentedPredictor:
             out_time,
             list(outputs),
             feedback=feedback,
+            sample_time=self.base.inputs_of(experiment)[0],
         )
         y = np.array(y, dtype=float)
         names = list(outputs)

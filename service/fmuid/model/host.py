@@ -112,6 +112,7 @@ class HostedSimulator(SimulatorBase):
         output_time: np.ndarray,
         outputs: Sequence[str],
         feedback: Feedback | None = None,
+        sample_time: np.ndarray | None = None,
     ) -> np.ndarray:
         """Simulate once in the child process; as :meth:`Simulator.simulate`."""
         if self._child is None or self._runs >= self.runs_per_process:
@@ -125,6 +126,7 @@ class HostedSimulator(SimulatorBase):
             output_time,
             list(outputs),
             feedback,
+            sample_time,
         )
         try:
             self._child.conn.send(request)

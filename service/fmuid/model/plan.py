@@ -46,6 +46,9 @@ class RunPlan:
         Input slopes over each grid interval [unit/s]; zero for held (non-float) inputs.
     input_time
         The input sample times [s].
+    sample_time
+        The times whose intervals bound the input sub-steps (:attr:`segment`): the input sample
+        times, or the coarser times the inputs were sampled at before a caller resampled them.
     row_start, rows
         ``rows[row_start[k]:row_start[k + 1]]`` are the rows of the result read at grid point
         ``k`` (:attr:`rows_at` as lists).
@@ -58,6 +61,7 @@ class RunPlan:
     value: np.ndarray
     slope: np.ndarray
     input_time: np.ndarray
+    sample_time: np.ndarray
     row_start: np.ndarray
     rows: np.ndarray
     n_rows: int
@@ -87,12 +91,16 @@ class RunPlan:
 
     @cached_property
     def segment(self) -> np.ndarray:
-        """Length [s] of the input sample interval each grid interval lies in (inf outside)."""
+        """Length [s] of the sample interval (:attr:`sample_time`) each grid interval lies in.
+
+        Infinite outside the samples.
+        """
+        t = self.sample_time
         mid = 0.5 * (self.grid[:-1] + self.grid[1:])
-        j = np.searchsorted(self.input_time, mid, side="right") - 1
-        inside = (j >= 0) & (j < self.input_time.size - 1)
-        jc = np.clip(j, 0, max(self.input_time.size - 2, 0))
-        length = self.input_time[np.minimum(jc + 1, self.input_time.size - 1)] - self.input_time[jc]
+        j = np.searchsorted(t, mid, side="right") - 1
+        inside = (j >= 0) & (j < t.size - 1)
+        jc = np.clip(j, 0, max(t.size - 2, 0))
+        length = t[np.minimum(jc + 1, t.size - 1)] - t[jc]
         return np.append(np.where(inside, length, np.inf), np.inf)
 
     @cached_property
@@ -119,12 +127,14 @@ def make_plan(
     input_values: Mapping[str, np.ndarray],
     inputs: Sequence[Variable],
     output_time: np.ndarray,
+    sample_time: np.ndarray | None = None,
 ) -> RunPlan:
     """Build the grid of a run from input samples and output times.
 
     Continuous float inputs are linear between their samples; discrete ones and integer,
     Boolean and enumeration inputs hold each sample's value until the next sample. All inputs
-    are constant before the first and after the last sample.
+    are constant before the first and after the last sample. ``sample_time`` (default: the
+    input times) gives the sample intervals that bound the input sub-steps.
 
     Raises
     ------
@@ -158,7 +168,8 @@ def make_plan(
     if held:
         value[:, held] = samples[held][:, np.maximum(grid.hold, 0)].T
         slope[:, held] = 0.0
-    return RunPlan(grid.times, value, slope, t_in, grid.row_start, grid.rows, t_out.size)
+    sampled = t_in if sample_time is None else np.asarray(sample_time, dtype=float)
+    return RunPlan(grid.times, value, slope, t_in, sampled, grid.row_start, grid.rows, t_out.size)
 
 
 @dataclass(frozen=True)

@@ -136,6 +136,7 @@ class Simulator(SimulatorBase):
         output_time: np.ndarray,
         outputs: Sequence[str],
         feedback: Feedback | None = None,
+        sample_time: np.ndarray | None = None,
     ) -> np.ndarray:
         """Simulate once and return the outputs at the output times.
 
@@ -163,6 +164,12 @@ class Simulator(SimulatorBase):
             Terms of the FMU's own outputs added to its inputs at every step of at most
             ``feedback.step`` (:mod:`fmuid.model.feedback`; co-simulation only); an input that
             receives a term but is not in ``input_values`` is driven by the terms alone.
+        sample_time
+            The times the inputs were sampled at when ``input_time`` resamples them on a finer
+            grid (default: ``input_time``). An FMU without input derivatives crosses each
+            interval where an input changes in sub-steps of at most ``input_step``, and at most
+            :data:`~fmuid.model.base.MAX_SUB_STEPS` per interval of these times, so a finer
+            resampling of the same inputs does not multiply the sub-steps.
 
         Returns
         -------
@@ -182,12 +189,12 @@ class Simulator(SimulatorBase):
         """
         if feedback is not None:
             return self._simulate_feedback(
-                params, input_time, input_values, output_time, outputs, feedback
+                params, input_time, input_values, output_time, outputs, feedback, sample_time
             )
         par = self._channels_for(tuple(params), "parameter")
         inputs = self._channels_for(tuple(input_values), "input")
         out = self._channels_for(tuple(outputs), "output")
-        plan, _ = self._plan(input_time, input_values, inputs, output_time)
+        plan, _ = self._plan(input_time, input_values, inputs, output_time, None, sample_time)
         values = list(params.values())
         result, stopped = self._run(values, plan, par, inputs, out)
         if stopped is not None:
@@ -215,6 +222,7 @@ class Simulator(SimulatorBase):
         output_time: np.ndarray,
         outputs: Sequence[str],
         feedback: Feedback,
+        sample_time: np.ndarray | None,
     ) -> np.ndarray:
         """Run with the feedback terms closed around the FMU (see :meth:`simulate`)."""
         if not self.model.is_cosimulation:
@@ -228,7 +236,9 @@ class Simulator(SimulatorBase):
         out = self._channels_for(tuple(outputs), "output")
         sources = self._channels_for(feedback.sources, "output")
         t_out = np.asarray(output_time, dtype=float)
-        plan, fine = self._plan(input_time, input_values, inputs, output_time, feedback)
+        plan, fine = self._plan(
+            input_time, input_values, inputs, output_time, feedback, sample_time
+        )
         instance = self._start()
         t0 = float(plan.grid[0])
         instance.setup_experiment(t0, None)
@@ -258,6 +268,7 @@ class Simulator(SimulatorBase):
         inputs: Channels,
         output_time: np.ndarray,
         feedback: Feedback | None = None,
+        sample_time: np.ndarray | None = None,
     ) -> tuple[RunPlan, np.ndarray]:
         """Return the run's plan and output grid, reused while the same arrays come back.
 
@@ -266,9 +277,10 @@ class Simulator(SimulatorBase):
         With ``feedback`` the output grid is refined to its step (:func:`fine_times`) and its
         undriven inputs are zero.
         """
-        arrays = (input_time, output_time, *input_values.values())
+        sampled = () if sample_time is None else (sample_time,)
+        arrays = (input_time, output_time, *sampled, *input_values.values())
         closed = None if feedback is None else (feedback.step, feedback.inputs)
-        key = (tuple(input_values), closed, *map(id, arrays))
+        key = (tuple(input_values), closed, len(sampled), *map(id, arrays))
         hit = self._plans.get(key)  # the arrays are kept alive there, so their ids are theirs
         if hit is not None and all(map(np.array_equal, arrays, hit[1])):
             return hit[2]
@@ -276,7 +288,7 @@ class Simulator(SimulatorBase):
         if feedback is not None:
             input_values = feedback_inputs(feedback, input_time, dict(input_values))
             grid = fine_times(grid, feedback.step)
-        plan = make_plan(input_time, input_values, inputs.variables, grid)
+        plan = make_plan(input_time, input_values, inputs.variables, grid, sample_time)
         copies = tuple(np.array(a, dtype=float, copy=True) for a in arrays)
         entry = (arrays, copies, (plan, grid))
         size = array_bytes(entry)
