@@ -47,7 +47,7 @@ from fmuid.discrepancy.result import Diagnosis
 from fmuid.discrepancy.run import Run, added_estimates, fit_of, scan_base, score, tie_intervals
 from fmuid.discrepancy.scan import CandidateFit, augmented
 from fmuid.discrepancy.schema import AbsorbedOut, CorrectionOut, TieOut
-from fmuid.discrepancy.settle import settles, settling_tests
+from fmuid.discrepancy.settle import settles, settling_or_reason
 from fmuid.discrepancy.tasks import candidate_pool
 from fmuid.discrepancy.validate import validation
 from fmuid.engine.count import counting
@@ -323,7 +323,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
     ties = decide.ties(best, rivals) if len(applied) == 1 else []
     tied = [{**t.to_dict(), "intervals": tie_intervals(run, t.fit)} for t in ties]
-    tests = settling_tests(problem, best, ties) if opts.discriminate else []
+    tests, no_test = settling_or_reason(problem, best, ties) if opts.discriminate else ([], "")
     for entry, test in zip(tied, tests):
         entry["expected_separation"] = round(test.expected_chi2, 4)
     rival = None
@@ -359,6 +359,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         )
         + explain.misfit_scale(final_fit.chi2, fit.n_data - aug.n_free, residuals_pass)
         + explain.settle(tests)
+        + no_test
         + explain.held_out(checked)
         + explain.levels(where["levels"]),
         candidates=tuple(scores),

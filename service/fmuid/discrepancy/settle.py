@@ -9,6 +9,7 @@ searched for the one whose expected likelihood-ratio statistic between the two i
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 
 from scipy import stats
@@ -16,6 +17,7 @@ from scipy import stats
 from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.discrepancy.decide import Tie
 from fmuid.discrepancy.scan import CandidateFit
+from fmuid.errors import FmuidError
 from fmuid.estimation.problem import Problem
 from fmuid.experiment_design.discriminate import (
     Discrimination,
@@ -23,6 +25,8 @@ from fmuid.experiment_design.discriminate import (
     default_space,
     discriminating_experiments,
 )
+
+log = logging.getLogger(__name__)
 
 SETTLES = 1e-3
 """A proposed test settles a tie when its expected likelihood-ratio statistic (1 df) has a
@@ -85,6 +89,23 @@ def settling_tests(
     return discriminating_experiments(
         problem.fmu_path, problem.spec, space, a, others, confirm_from=floor
     )
+
+
+def settling_or_reason(
+    problem: Problem, named: CandidateFit, ties: Sequence[Tie]
+) -> tuple[list[Discrimination], str]:
+    """Return :func:`settling_tests`, or none and the verdict's sentence when the search failed.
+
+    The search is a proposal on top of a finished diagnosis: a test space the data cannot
+    support or an FMU that fails on a proposed input costs the proposal, not the diagnosis.
+    """
+    if not ties:
+        return [], ""
+    try:
+        return settling_tests(problem, named, ties), ""
+    except FmuidError as exc:
+        log.warning("no test proposed to settle the tie: %s", exc)
+        return [], f" No test to settle the tie was searched: {exc}."
 
 
 def hypothesis_names(fits: Sequence[CandidateFit]) -> list[str]:
