@@ -5,7 +5,8 @@ hide is the part of the effect that no move of the base parameters reproduces. T
 therefore works in two steps per candidate:
 
 1. **Linearised screen** (a few simulations). For the added parameter at a grid of values
-   ``g`` (and at the optimum of the linear approximation), the change of the weighted
+   ``g`` (and at the optimum of the linear approximation, and near a threshold's onset:
+   :mod:`.onset`), the change of the weighted
    residuals ``d_g = r_0 - r(g)`` is computed by simulation, and the base parameters are
    re-adjusted to first order: ``chi2_lin(g) = ||(I - P) r(g)||^2`` with ``P`` the projection
    onto the base fit's sensitivities. The drop ``chi2_lin(off) - min_g chi2_lin(g)`` is the
@@ -34,6 +35,7 @@ from scipy import stats
 from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.discrepancy.effects import Effect, OutputSaturation
 from fmuid.discrepancy.knowledge import AddedParameter
+from fmuid.discrepancy.onset import onset_levels
 from fmuid.discrepancy.threshold import ClipNull, LevelsNull, ThresholdNull, unit_columns
 from fmuid.errors import FmuidError
 from fmuid.estimation.optimize import FitOptions, Mapper, refine, safe_residuals
@@ -269,11 +271,19 @@ class Scanner:
             points.append(
                 {p.name: off[p.name] if v is None else v for p, v in zip(params, reached)}
             )
+        evaluated = [(point, self._residuals_at(aug, point)) for point in points]
+        if len(params) == 1:
+            name = params[0].name
+            near = onset_levels(
+                params[0],
+                [(point[name], self.r0 - r) for point, r in evaluated],
+                lambda v: self.r0 - self._residuals_at(aug, {name: v}),
+            )
+            evaluated += [({name: v}, self.r0 - d) for v, d in near]
         base_lin = float(self.project(self.r0) @ self.project(self.r0))
         best_point, best_chi2, best_r = None, base_lin, self.r0
         changes = []
-        for point in points:
-            r = self._residuals_at(aug, point)
+        for point, r in evaluated:
             changes.append(self.r0 - r)
             rp = self.project(r)
             chi2_lin = float(rp @ rp)
