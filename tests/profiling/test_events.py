@@ -14,8 +14,12 @@ from scipy.optimize import minimize_scalar
 
 import fmuid
 from fmuid.data import experiment_from_arrays, spec_from_json
+from fmuid.estimation import optimize
+from fmuid.estimation.optimize import fit_problem
 from fmuid.model.simulator import Simulator
+from fmuid.profiling.engine import profile_problem
 from fmuid.profiling.intervals import NOISE_PREFIX
+from fmuid.profiling.walk import WalkOptions
 from fmuid.stages import make_problem
 
 FMU = Path(__file__).parents[3] / "shared" / "reference-fmus" / "fmi2" / "BouncingBall.fmu"
@@ -100,3 +104,21 @@ def test_bouncing_ball_exact_interval_and_non_smoothness_reported():
         exact = crossing(problem, e_hat, chi2_hat, thr, direction, half)
         assert abs(end - exact) <= 0.05 * abs(exact - e_hat), (direction, end, exact)
     assert lo < 0.7 < hi
+
+
+def test_a_profile_that_is_not_thorough_polishes_no_re_fit(monkeypatch):
+    """The diagnosis's setting: the jumps raise the difference step, and no re-fit is polished
+    by Powell's method (a minute per re-fit of a slow FMU); the interval still holds e."""
+    experiment, spec = bouncing_ball_case()
+    problem = make_problem(FMU, [experiment], spec)
+    fit = fit_problem(problem)
+
+    def no_polish(*args, **kwargs):
+        raise AssertionError("a re-fit was polished")
+
+    monkeypatch.setattr(optimize, "minimize", no_polish)
+    options = WalkOptions(thorough=False)
+    result = profile_problem(problem, fit, workers=1, options=options)
+    assert not result.checks["health"]["smooth"]
+    lo, hi = result.parameters["e"].ci_simultaneous
+    assert lo is not None and hi is not None and lo < 0.7 < hi

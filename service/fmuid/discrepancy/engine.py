@@ -93,7 +93,9 @@ class DiagnoseOptions:
         Processes for the profile branches (1: in this process).
     walk
         Profile walk settings: the walk stops at the simultaneous threshold, past the
-        pointwise crossing that gives the intervals.
+        pointwise crossing that gives the intervals; a non-smooth objective gets larger
+        difference steps, not the thorough profile of ``fmuid profile``
+        (:attr:`~fmuid.profiling.walk.WalkOptions.thorough`).
 
     """
 
@@ -111,6 +113,7 @@ class DiagnoseOptions:
         margin=0.0,
         max_points=12,
         refit=FitOptions(ftol=1e-7, xtol=1e-7, gtol=1e-7, max_nfev=20),
+        thorough=False,
     )
 
 

@@ -59,8 +59,9 @@ def profile_problem(
     """Profile likelihoods of the free parameters around a fit.
 
     A health check of the objective comes first (non-smooth FMUs get larger finite-difference
-    steps, polished re-fits and checks at every end, and each branch walks as far again past
-    its first crossing, the outermost crossing being the end; where chi2 jumps by a tenth of
+    steps and, with ``options.thorough``, polished re-fits and checks at every end, and each
+    branch walks as far again past its first crossing, the outermost crossing being the end;
+    where chi2 jumps by a tenth of
     the pointwise threshold or more, no end is labelled ``identifiable``); a fit without
     global search is checked from diverse starts (full studies only, ``only=None``). Every
     parameter is then walked in both directions (branches run in parallel), its pointwise and
@@ -134,12 +135,14 @@ def _profiles(
     health = check_health(
         problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
     )
-    if not health.smooth:
+    if not health.smooth and options.thorough:
         log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
         refit = replace(options.refit, diff_step=health.diff_step, polish=True)
         options = replace(options, refit=refit, checks=replace(options.checks, always=True))
-    if not health.smooth:
         options = replace(options, overshoot=1.0)
+    elif not health.smooth:
+        log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
+        options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
     if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:

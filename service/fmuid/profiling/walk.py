@@ -58,6 +58,12 @@ class WalkOptions:
         the estimate is ``1 + overshoot`` times that point's, in ``OVERSHOOT_STEPS`` equal steps
         (for a non-smooth objective, where the profile may cross back under the threshold;
         0: stop at the first point over it).
+    thorough
+        Whether a non-smooth objective (found by the health check) gets the thorough profile:
+        re-fits polished by Powell's method (up to 60 runs per free parameter each), checks
+        at every end and an overshoot of 1. Without it, only the finite-difference step is
+        raised above the noise floor (the diagnosis's profiles: a clip or a switching FMU
+        makes its objective non-smooth, and polished re-fits of a slow FMU cost minutes each).
 
     """
 
@@ -78,6 +84,7 @@ class WalkOptions:
     checks: CheckOptions = field(default_factory=CheckOptions)
     overshoot: float = 0.0
     quasi_tol: float = 2e-4
+    thorough: bool = True
 
 
 #: Consecutive points where the Gauss-Newton re-fit did not settle after which the walk
