@@ -17,10 +17,13 @@ def _level(scale: str) -> AddedParameter:
     return AddedParameter("h_max", "m", "overflow level", spec, 100.0, "high")
 
 
+RAMP = np.linspace(0.0, REACHED, 50)
+"""The weighted residuals without the clip: samples up to REACHED."""
+
+
 def _change(level: float) -> np.ndarray:
-    """Residual changes of a clip at ``level`` on a ramp of samples up to REACHED."""
-    y = np.linspace(0.0, REACHED, 50)
-    return y - np.minimum(y, level)
+    """Weighted residuals with a clip at ``level``."""
+    return np.minimum(RAMP, level)
 
 
 def test_the_gap_between_no_effect_and_effect_is_bisected_towards_the_onset() -> None:
@@ -28,15 +31,15 @@ def test_the_gap_between_no_effect_and_effect_is_bisected_towards_the_onset() ->
     grid = np.logspace(np.log10(2.0), np.log10(100.0), 7)
     calls: list[float] = []
 
-    def change(v: float) -> np.ndarray:
-        calls.append(v)
-        return _change(v)
+    def change(value: dict[str, float]) -> np.ndarray:
+        calls.append(value["h_max"])
+        return _change(value["h_max"])
 
-    found = onset_levels(p, [(float(g), _change(g)) for g in grid], change)
+    found = onset_levels(p, [(float(g), _change(g)) for g in grid], change, RAMP)
     assert len(calls) == BISECTIONS
     below, above = grid[grid < REACHED].max(), grid[grid > REACHED].min()
     assert all(below < v < REACHED for v, _ in found)
-    assert found and all(np.sum(d * d) > 0 for _, d in found)
+    assert found and all(np.sum((RAMP - r) ** 2) > 0 for _, r in found)
     # the last level tried is within a 32nd of the grid's log step from the onset
     assert abs(np.log(calls[-1] / REACHED)) <= np.log(above / below) / 2**BISECTIONS
     # log scale: the first try is the geometric middle of the gap
@@ -44,6 +47,9 @@ def test_the_gap_between_no_effect_and_effect_is_bisected_towards_the_onset() ->
 
 
 def test_a_grid_felt_everywhere_adds_nothing() -> None:
+    def change(value: dict[str, float]) -> np.ndarray:
+        return _change(value["h_max"])
+
     p = _level("lin")
     grid = np.linspace(2.0, 9.0, 7)
-    assert onset_levels(p, [(float(g), _change(g)) for g in grid], _change) == []
+    assert onset_levels(p, [(float(g), _change(g)) for g in grid], change, RAMP) == []

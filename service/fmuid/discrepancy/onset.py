@@ -27,45 +27,49 @@ BISECTIONS = 5
 def onset_levels(
     p: AddedParameter,
     tried: Sequence[tuple[float, np.ndarray]],
-    change: Callable[[float], np.ndarray],
+    residuals: Callable[[dict[str, float]], np.ndarray],
+    r0: np.ndarray,
 ) -> list[tuple[float, np.ndarray]]:
-    """Return the bisected values near each onset, with the residual changes they make.
+    """Return the bisected values near each onset, with their weighted residuals.
 
     Parameters
     ----------
     p
         The candidate's one parameter.
     tried
-        The screened values and their weighted residual changes ``r_0 - r``.
-    change
-        Simulates one value and returns its change.
+        The screened values and their weighted residuals.
+    residuals
+        Simulates the model with ``{p.name: value}`` and returns its weighted residuals.
+    r0
+        The weighted residuals of the model without the candidate.
 
     Returns
     -------
-    list of (value, change)
+    list of (value, residuals)
         Only values with an effect (a value without one adds nothing to the screen).
 
     """
     log_scale = p.spec.resolved_scale == "log"
 
-    def felt(d: np.ndarray) -> bool:
-        return bool(np.sum(d * d) > NO_EFFECT)
+    def felt(r: np.ndarray) -> bool:
+        d = r0 - r
+        return bool(d @ d > NO_EFFECT)
 
     def middle(a: float, b: float) -> float:
         return float(np.sqrt(a * b)) if log_scale and a > 0 and b > 0 else 0.5 * (a + b)
 
     found: list[tuple[float, np.ndarray]] = []
     ordered = sorted(tried, key=lambda item: item[0])
-    for (a, da), (b, db) in zip(ordered, ordered[1:]):
-        if felt(da) == felt(db):
+    for (a, ra), (b, rb) in zip(ordered, ordered[1:]):
+        if felt(ra) == felt(rb):
             continue
-        inside, outside = (a, b) if felt(da) else (b, a)
+        inside, outside = (a, b) if felt(ra) else (b, a)
         for _ in range(BISECTIONS):
             value = middle(inside, outside)
-            d = change(value)
-            if felt(d):
+            r = residuals({p.name: value})
+            if felt(r):
                 inside = value
-                found.append((value, d))
+                found.append((value, r))
             else:
                 outside = value
     return found

@@ -6,8 +6,8 @@ therefore works in two steps per candidate:
 
 1. **Linearised screen** (a few simulations). For the added parameter at a grid of values
    ``g`` (and at the optimum of the linear approximation, and near a threshold's onset:
-   :mod:`.onset`), the change of the weighted
-   residuals ``d_g = r_0 - r(g)`` is computed by simulation, and the base parameters are
+   :mod:`.onset`), the change of the weighted residuals ``d_g = r_0 - r(g)`` is computed by
+   simulation, and the base parameters are
    re-adjusted to first order: ``chi2_lin(g) = ||(I - P) r(g)||^2`` with ``P`` the projection
    onto the base fit's sensitivities. The drop ``chi2_lin(off) - min_g chi2_lin(g)`` is the
    screen statistic. The direction ``u = (I - P) d`` at the smallest effect (the probe) is the
@@ -27,6 +27,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, TypeVar
 
 import numpy as np
@@ -261,7 +262,7 @@ class Scanner:
         theta = np.linalg.lstsq(u, self.r0, rcond=None)[0]
         points: list[dict[str, float]] = []
         if len(params) == 1:
-            p = params[0]
+            (p,) = params
             points = [{p.name: float(g)} for g in _grid(p)]
             best = _from_step(p, probes[p.name], float(theta[0]))
             if best is not None:
@@ -272,14 +273,10 @@ class Scanner:
                 {p.name: off[p.name] if v is None else v for p, v in zip(params, reached)}
             )
         evaluated = [(point, self._residuals_at(aug, point)) for point in points]
-        if len(params) == 1:
-            name = params[0].name
-            near = onset_levels(
-                params[0],
-                [(point[name], self.r0 - r) for point, r in evaluated],
-                lambda v: self.r0 - self._residuals_at(aug, {name: v}),
-            )
-            evaluated += [({name: v}, self.r0 - d) for v, d in near]
+        if len(params) == 1:  # p: the one parameter (above)
+            tried = [(point[p.name], r) for point, r in evaluated]
+            near = onset_levels(p, tried, partial(self._residuals_at, aug), self.r0)
+            evaluated += [({p.name: v}, r) for v, r in near]
         base_lin = float(self.project(self.r0) @ self.project(self.r0))
         best_point, best_chi2, best_r = None, base_lin, self.r0
         changes = []
@@ -395,9 +392,8 @@ def scan(
     chosen.sort()
     k = len(chosen)
     fitted = mapper(fit_task, [scanner] * k, [screened[i] for i in chosen], [options] * k)
-    out = list(screened)
-    for i, f in zip(chosen, fitted):
-        out[i] = f
+    fits = dict(zip(chosen, fitted, strict=True))
+    out = [fits.get(i, s) for i, s in enumerate(screened)]
     if callable(on_candidate):
         for f in out:
             on_candidate(f)
