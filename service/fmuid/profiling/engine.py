@@ -13,7 +13,7 @@ from scipy.stats import chi2 as chi2_dist
 
 from fmuid.engine.count import counting
 from fmuid.engine.run import open_engine
-from fmuid.estimation.optimize import FitOptions, jacobian, make_fit_result, refine
+from fmuid.estimation.optimize import jacobian
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.estimation.space import z_to_value
@@ -22,6 +22,7 @@ from fmuid.profiling.branch import BranchResult, BranchTask
 from fmuid.profiling.checks import check_fit, distinct_valleys
 from fmuid.profiling.health import NOISY_FRACTION, check_health
 from fmuid.profiling.intervals import is_flat, label, noise_limited, open_reason, profile_noise
+from fmuid.profiling.optimum import descend, refit_optimum
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
 from fmuid.profiling.structural import structural_check
@@ -143,6 +144,9 @@ def _profiles(
     elif not health.smooth:
         log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
         options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))
+    settle = options.refit if health.smooth else replace(options.refit, polish=True)
+    if not health.smooth:
+        fit = descend(problem, fit, settle)
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
     if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
@@ -157,7 +161,7 @@ def _profiles(
                 fit_check["lower_found"] = True
                 better_found = True
                 pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
-                fit = _refit(problem, best.z, fit, options.refit)
+                fit = refit_optimum(problem, best.z, fit, settle)
         fit_check["simulations"] = checked.simulations
     for _ in range(MAX_RESTARTS + 1):
         valleys = distinct_valleys(
@@ -173,7 +177,7 @@ def _profiles(
         best = min(better, key=lambda p: p.chi2)
         log.info("profile found chi2 %.6g below the optimum %.6g; refitting", best.chi2, fit.chi2)
         pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
-        fit = _refit(problem, best.z, fit, options.refit)
+        fit = refit_optimum(problem, best.z, fit, settle)
     check = structural_check(
         fit.jacobian, problem.names, problem.scales, [fit.estimates[n] for n in problem.names]
     )
@@ -186,16 +190,6 @@ def _profiles(
         profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check, floor)
     fit_check["valleys"] = len(valleys)
     return fit, profiles, better_found, check, {"health": health.to_dict(), "fit": fit_check}
-
-
-def _refit(problem: Problem, z0: np.ndarray, fit: FitResult, walk: FitOptions) -> FitResult:
-    """Refine from a lower point and return the new fit (polished when the walk's re-fits are)."""
-    t_refit = time.perf_counter()
-    with counting() as count:
-        z, chi2, message = refine(problem, z0, options=FitOptions(polish=walk.polish))
-        jac = jacobian(problem, z)
-    cost = Cost(count.simulations, time.perf_counter() - t_refit)
-    return make_fit_result(problem, z, chi2, jac, message, fit.global_search, cost)
 
 
 def _walk_all(
