@@ -60,6 +60,7 @@ from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
 from fmuid.estimation.series import residual_series as fit_series
 from fmuid.experiment_design.schema import DiscriminatingOut
+from fmuid.profiling.checks import CheckOptions
 from fmuid.profiling.engine import profile_problem
 from fmuid.profiling.walk import WalkOptions
 from fmuid.progress import ProgressCallback
@@ -95,7 +96,11 @@ class DiagnoseOptions:
         Profile walk settings: the walk stops at the simultaneous threshold, past the
         pointwise crossing that gives the intervals; a non-smooth objective gets larger
         difference steps, not the thorough profile of ``fmuid profile``
-        (:attr:`~fmuid.profiling.walk.WalkOptions.thorough`).
+        (:attr:`~fmuid.profiling.walk.WalkOptions.thorough`); the checks of its ends re-fit
+        from other valleys and diverse starts with at most 40 evaluations (150 in ``fmuid
+        profile``) and re-walk a branch once (3): after a restart each end is re-fitted from
+        every earlier optimum, and on a slow FMU with a clipped level each such re-fit cost
+        minutes.
 
     """
 
@@ -114,6 +119,9 @@ class DiagnoseOptions:
         max_points=12,
         refit=FitOptions(ftol=1e-7, xtol=1e-7, gtol=1e-7, max_nfev=20),
         thorough=False,
+        checks=CheckOptions(  # noqa: B008 (frozen value)
+            max_rewalks=1, refit=FitOptions(ftol=1e-6, xtol=1e-6, gtol=1e-6, max_nfev=40)
+        ),
     )
 
 
