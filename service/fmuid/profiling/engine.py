@@ -145,6 +145,9 @@ def _profiles(
         log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
         options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))
     settle = options.refit if health.smooth else replace(options.refit, polish=True)
+    if not health.smooth and not options.thorough:
+        noise = max(health.chi2_noise.values(), default=0.0) / max(1.0, thr["simultaneous"])
+        options = replace(options, better_tol=max(options.better_tol, noise))
     if not health.smooth:
         fit = descend(problem, fit, settle)
     pool: list[WalkPoint] = []

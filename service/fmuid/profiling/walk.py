@@ -41,7 +41,11 @@ class WalkOptions:
     max_failures
         Consecutive failed points after which the branch stops.
     better_tol
-        A chi2 this much below the optimum counts as a better optimum.
+        A chi2 this much below the optimum (a fraction of the simultaneous threshold, at least
+        1) counts as a better optimum; on a non-smooth objective, when not ``thorough``, at
+        least the largest jump of chi2 the health check measured (a lower point within the
+        jumps is not resolved; the thorough profile restarts for it, its ends measured from
+        the lowest optimum found).
     refit
         Tolerances of the re-fit of the other parameters at each point (and at the ends).
     end_tolerance
