@@ -20,7 +20,7 @@ from fmuid.estimation.space import z_to_value
 from fmuid.model.registry import fmu_summary
 from fmuid.profiling.branch import BranchResult, BranchTask
 from fmuid.profiling.checks import check_fit, distinct_valleys
-from fmuid.profiling.health import NOISY_FRACTION, check_health
+from fmuid.profiling.health import NOISY_FRACTION, Health, check_health
 from fmuid.profiling.intervals import is_flat, label, noise_limited, open_reason, profile_noise
 from fmuid.profiling.optimum import descend, refit_optimum
 from fmuid.profiling.points import WalkPoint
@@ -136,19 +136,10 @@ def _profiles(
     health = check_health(
         problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
     )
-    if not health.smooth and options.thorough:
-        log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
-        refit = replace(options.refit, diff_step=health.diff_step, polish=True)
-        options = replace(options, refit=refit, checks=replace(options.checks, always=True))
-        options = replace(options, overshoot=1.0)
-    elif not health.smooth:
-        log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
-        options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))
-    settle = options.refit if health.smooth else replace(options.refit, polish=True)
-    if not health.smooth and not options.thorough:
-        noise = max(health.chi2_noise.values(), default=0.0) / max(1.0, thr["simultaneous"])
-        options = replace(options, better_tol=max(options.better_tol, noise))
+    settle = options.refit
     if not health.smooth:
+        options = _non_smooth(options, health, thr["simultaneous"])
+        settle = replace(options.refit, polish=True)
         fit = descend(problem, fit, settle)
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
@@ -193,6 +184,23 @@ def _profiles(
         profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check, floor)
     fit_check["valleys"] = len(valleys)
     return fit, profiles, better_found, check, {"health": health.to_dict(), "fit": fit_check}
+
+
+def _non_smooth(options: WalkOptions, health: Health, threshold: float) -> WalkOptions:
+    """Return the walk settings for a non-smooth objective (see :class:`WalkOptions`).
+
+    Thorough: polished re-fits, checks at every end and an overshoot of 1. Otherwise a lower
+    point within the jumps of chi2 the health check measured is not a better optimum. Both
+    raise the difference step to the health check's.
+    """
+    refit = replace(options.refit, diff_step=health.diff_step)
+    if options.thorough:
+        log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
+        checks = replace(options.checks, always=True)
+        return replace(options, refit=replace(refit, polish=True), checks=checks, overshoot=1.0)
+    log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
+    noise = max(health.chi2_noise.values(), default=0.0) / max(1.0, threshold)
+    return replace(options, refit=refit, better_tol=max(options.better_tol, noise))
 
 
 def _walk_all(
