@@ -19,7 +19,7 @@ from tests.model.spy import FmuSpy
 from fmuid.discrepancy.knowledge import read_annotations
 from fmuid.engine.run import open_engine
 from fmuid.model.annotations import planar_paths
-from fmuid.model.fmu import FmuModel, load_model
+from fmuid.model.fmu import FmuModel, load_model, model_of_file
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
 from fmuid.model.world import open_registry, registry
 
@@ -109,3 +109,16 @@ def test_a_pool_worker_parses_the_fmu_once(msd_fmu: Path) -> None:
         seen = engine.map(_in_worker, [model] * 4)
     assert all(pid != os.getpid() for pid, _, _ in seen)
     assert {(parses, counts) for _, parses, counts in seen} == {(1, (0, 0, 0))}
+
+
+def test_a_model_whose_file_is_gone_is_not_found_by_its_checksum(
+    msd_fmu: Path, tmp_path: Path
+) -> None:
+    """A copy parsed and deleted, then the same bytes at another path: workers get that path."""
+    gone = Path(shutil.copy(msd_fmu, tmp_path / "gone.fmu"))
+    with open_registry() as world:
+        model_of_file(gone)
+        gone.unlink()
+        here = model_of_file(msd_fmu)
+        assert load_model(here.file).path == here.path
+        assert world.parses == 2

@@ -72,10 +72,14 @@ class FmuRegistry:
             self.parses += 1
 
     def model(self, key: tuple[str, str], parse: Callable[[], FmuModel]) -> FmuModel:
-        """Return the model of checksum and interface ``key``, parsing it on first request."""
+        """Return the model of checksum and interface ``key``, parsing it on first request.
+
+        A model whose file is gone (deleted or moved since it was parsed) is parsed again by
+        ``parse``: its simulators could not be made from it.
+        """
         with self._lock:
             model = self._by_checksum.get(key)
-            if model is None:
+            if model is None or not os.path.exists(model.path):
                 model = parse()
                 _keep(self._by_checksum, key, model)
             return model
@@ -83,14 +87,16 @@ class FmuRegistry:
     def file_model(self, key: FileKey, parse: Callable[[], FmuModel]) -> FmuModel:
         """Return the model of a file as last seen (``key``), parsing it when it changed.
 
-        A model parsed here is also found by its checksum (:meth:`model`).
+        A model parsed here is also found by its checksum (:meth:`model`), unless a model of
+        the same checksum whose file still exists was parsed before.
         """
         with self._lock:
             model = self._by_file.get(key)
             if model is None:
                 model = parse()
                 _keep(self._by_file, key, model)
-                if (model.sha256, model.interface) not in self._by_checksum:
+                same = self._by_checksum.get((model.sha256, model.interface))
+                if same is None or not os.path.exists(same.path):
                     _keep(self._by_checksum, (model.sha256, model.interface), model)
             return model
 
@@ -151,6 +157,7 @@ K = TypeVar("K")
 
 def _keep(table: dict[K, FmuModel], key: K, model: FmuModel) -> None:
     """Add ``model`` to ``table``, dropping the oldest entry past :data:`FILE_MODELS`."""
+    table.pop(key, None)
     if len(table) >= FILE_MODELS:
         table.pop(next(iter(table)))
     table[key] = model
