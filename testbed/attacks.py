@@ -114,11 +114,12 @@ def start_service(data_dir: Path, **env: str) -> tuple[subprocess.Popen[bytes], 
 
 
 def _poll_health(url: str, period: float, started: Any, stop: Any, results: Any) -> None:
-    """Poll health until ``stop`` is set; put the slowest answer's time and the failures.
+    """Poll health until ``stop`` is set; put the slowest answer's time, the failures and the
+    poller's latest wake-up.
 
     ``started`` is set after the first answer, so that the watch covers the whole attack.
     """
-    worst = 0.0
+    worst = late = 0.0
     failures: list[str] = []
     with httpx.Client(timeout=30) as client:
         while not stop.is_set():
@@ -131,8 +132,10 @@ def _poll_health(url: str, period: float, started: Any, stop: Any, results: Any)
                 failures.append(f"health failed: {exc!r}")
             worst = max(worst, time.perf_counter() - start)
             started.set()
+            asleep = time.perf_counter()
             stop.wait(period)
-    results.put((worst, failures))
+            late = max(late, time.perf_counter() - asleep - period)
+    results.put((worst, failures, late))
 
 
 class HealthWatch:
@@ -140,7 +143,8 @@ class HealthWatch:
 
     The poller lives outside the process that posts the attack, so that whatever that process
     does (building a large upload) does not delay the measurement. ``worst`` is the slowest
-    answer [s]; ``failures`` lists answers other than 200.
+    answer [s]; ``failures`` lists answers other than 200; ``late`` is the longest the poller
+    woke past its period [s], a measure of how busy the machine's cores were meanwhile.
     """
 
     def __init__(self, url: str, period: float = 0.01):
@@ -153,7 +157,7 @@ class HealthWatch:
             args=(url, period, self._started, self._stop, self._results),
             daemon=True,
         )
-        self.worst = 0.0
+        self.worst = self.late = 0.0
         self.failures: list[str] = []
 
     def __enter__(self) -> HealthWatch:
@@ -164,7 +168,7 @@ class HealthWatch:
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
-        self.worst, self.failures = self._results.get(timeout=60)
+        self.worst, self.failures, self.late = self._results.get(timeout=60)
         self._process.join()
 
 
