@@ -10,49 +10,26 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from tests.discrepancy.msd_truth import SPEC, msd_record
 
-from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.discrepancy.catalogue import study_catalogue
+from fmuid.discrepancy.effects import Effect
 from fmuid.discrepancy.forward import Step, _backward
 from fmuid.discrepancy.scan import CandidateFit, Scanner
 from fmuid.estimation.optimize import FitOptions, fit_problem, jacobian
 from fmuid.estimation.study import make_problem
 
-M, K, B, OFFSET, SIGMA, ALPHA = 1.1, 4.4, 1.6, 0.05, 0.005, 0.01
+OFFSET, ALPHA = 0.05, 0.01
 
 
-def _record():  # type: ignore[no-untyped-def]
-    rng = np.random.default_rng(3)
-    t = np.arange(0.0, 30.0, 0.05)
-    freqs, phases = rng.uniform(0.1, 1.5, 8), rng.uniform(0.0, 2 * np.pi, 8)
-    u = 0.6 * sum(np.sin(2 * np.pi * f * t + p) for f, p in zip(freqs, phases))
-
-    def rhs(tt: float, s: np.ndarray) -> list[float]:
-        x, v = s
-        return [v, (np.interp(tt, t, u) + OFFSET - B * v - K * x) / M]
-
-    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12, max_step=0.01)
-    return experiment_from_arrays(
-        "train.csv", t, {"f": u, "x": sol.y[0] + rng.normal(0, SIGMA, t.size)}
-    )
-
-
-def _added(scanner: Scanner, effect, stage: int) -> CandidateFit:  # type: ignore[no-untyped-def]
+def _added(scanner: Scanner, effect: Effect, stage: int) -> CandidateFit:
     return scanner.fit(scanner.screen(effect, stage), FitOptions())
 
 
 @pytest.mark.slow
 def test_a_stand_in_is_dropped_and_the_needed_effect_kept(msd_fmu: Path) -> None:
-    spec = spec_from_json(
-        '{"parameters": {"m": {"start": 1, "lower": 0.1, "upper": 10},'
-        ' "k": {"start": 4, "lower": 0.1, "upper": 20}, "b": {"start": 1, "lower": 0.1,'
-        ' "upper": 10}}, "inputs": ["f"], "outputs": {"x": {"sigma": 0.005}}, "seed": 0,'
-        ' "global_search": false}'
-    )
-    problem = make_problem(msd_fmu, [_record()], spec)
+    problem = make_problem(msd_fmu, [msd_record("train.csv", 3, OFFSET, 0.0)], SPEC)
     fit = fit_problem(problem, global_search=False)
     by_name = {c.effect: c for c in study_catalogue(problem, fit.estimates)}
     z = problem.to_z(fit.estimates)
@@ -69,8 +46,7 @@ def test_a_stand_in_is_dropped_and_the_needed_effect_kept(msd_fmu: Path) -> None
     (step,) = kept
     assert step.chi2_before == base.chi2
     assert step.fit.chi2 <= both.chi2 + 3.0  # the offset alone fits as well as both
-    assert step.fit.problem.from_z(step.fit.z)[by_name["input_offset"].names[0]] == pytest.approx(
-        OFFSET, rel=0.1
-    )
+    offset = step.fit.problem.from_z(step.fit.z)[by_name["input_offset"].names[0]]
+    assert offset == pytest.approx(OFFSET, rel=0.1)
     alone = _added(base, by_name["input_offset"], 1)
     assert _backward(base, [Step(alone, base.chi2, 0.0)], FitOptions(), ALPHA)[0].fit is alone
