@@ -102,3 +102,17 @@ def test_a_misfit_well_above_the_noise_widens_the_reading_of_the_intervals() -> 
     assert "63 times wider" in sentence  # sqrt(4000)
     assert explain.misfit_scale(4_000.0 * 10, 10, residuals_pass=True) == ""
     assert explain.misfit_scale(1.5 * 10, 10, residuals_pass=False) == ""
+
+
+def test_a_named_term_whose_interval_holds_its_off_value_is_said_to_be_loose() -> None:
+    pinned = AddedEstimate(0.1, (0.05, 0.2), 0.95, "m", 0.0, True)
+    loose = AddedEstimate(0.005, (-0.008, 0.013), 0.95, "V", 0.0, False)
+    found = _mismatch(
+        effect="output_saturation",
+        lrt_p_value=1e-9,
+        effects=(_step("output_saturation", "max_h2", pinned), _step("input_offset", "u0", loose)),
+    )
+    text = found.verdict()
+    assert text.startswith("output_saturation, then input_offset explain the mismatch")
+    assert "but the interval of input_offset holds the off value" in text
+    assert "output_saturation holds" not in text

@@ -240,6 +240,16 @@ class Diagnosis(Written):
                 f"; {', '.join(effect_of(t) for t in ties)} explain{'s' if len(ties) == 1 else ''}"
             )
             out += " it equally well"
+        loose = [
+            effect_of(e.effect)
+            for e in self.effects
+            if e.parameters and not any(p.excludes_off for p in e.parameters.values())
+        ]
+        if loose:
+            out += (
+                f"; but the interval of {' and of '.join(loose)} holds the off value: the data "
+                "do not pin that term down"
+            )
         return out + self._validation_clause() + "."
 
     def _validation_clause(self) -> str:
