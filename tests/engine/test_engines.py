@@ -3,6 +3,8 @@
 import os
 from dataclasses import dataclass
 
+import pytest
+
 from fmuid.engine.count import counted, counting
 from fmuid.engine.run import open_engine
 from fmuid.model.fmu import FmuModel
@@ -59,3 +61,37 @@ def test_counts_nest_and_a_task_counts_apart():
             counted(5)
     counted(7)
     assert (outer.simulations, inner.simulations, apart.simulations) == (5, 3, 5)
+
+
+def _stopped(model, **engine):
+    tasks = [Countdown(n) for n in (3, 0, 5, 1, 4, 2)]
+    asked, events = [], {}
+
+    def until(k, result):
+        asked.append(k)
+        return result[0] == 25  # the third task
+
+    with open_engine(model, at_most=len(tasks), **engine) as run, counting() as count:
+        results = run.run(
+            tasks, until=until, on_event=lambda k, e: events.setdefault(k, []).append(e)
+        )
+    return [r[0] for r in results], asked, events, count.simulations
+
+
+@pytest.mark.slow
+def test_a_run_stops_at_the_first_task_in_order_whose_result_says_so(msd_fmu):
+    """The same task stops the run in this process, two workers and dask."""
+    from distributed import Client, LocalCluster
+
+    model = FmuModel(msd_fmu)
+    here, asked, events, sims = _stopped(model, workers=1)
+    assert here == [9, 0, 25] and asked == [0, 1, 2]
+    assert set(events) == {0, 2} and sims == 3 + 0 + 5  # the later tasks never ran
+    pooled, pooled_asked, _, _ = _stopped(model, workers=2)
+    assert pooled == here and pooled_asked == asked
+    with (
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        Client(cluster) as client,
+    ):
+        remote, remote_asked, _, _ = _stopped(model, executor=client)
+    assert remote == here and remote_asked == asked

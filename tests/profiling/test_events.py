@@ -150,11 +150,9 @@ def test_a_fit_short_of_the_minimum_is_polished_once_before_the_walks():
     assert not result.better_optimum_found
 
 
-@pytest.mark.parametrize(("jump", "restarts"), [(5.0, False), (1e-3, True)])
-def test_a_lower_point_within_the_jumps_of_chi2_restarts_nothing(monkeypatch, jump, restarts):
-    """On a non-smooth objective a walk's chi2 below the optimum by less than the jumps the
-    health check measured is not a better optimum (no restart of every profile); by more, it
-    is. The optimum is left short by about 1 (its refinement before the walks is skipped)."""
+def _short_of_the_minimum(monkeypatch, jump):
+    """BouncingBall's problem and a fit left about 1 short of its minimum (its refinement before
+    the walks skipped), the health check's jumps of chi2 set to ``jump``."""
     experiment, spec = bouncing_ball_case()
     problem = make_problem(FMU, [experiment], spec)
     fit = fit_problem(problem)
@@ -169,6 +167,49 @@ def test_a_lower_point_within_the_jumps_of_chi2_restarts_nothing(monkeypatch, ju
 
     monkeypatch.setattr(engine, "check_health", jumpy)
     monkeypatch.setattr(engine, "descend", lambda problem, fit, settle: fit)
+    return problem, short
+
+
+@pytest.mark.parametrize(("jump", "restarts"), [(5.0, False), (1e-3, True)])
+def test_a_lower_point_within_the_jumps_of_chi2_restarts_nothing(monkeypatch, jump, restarts):
+    """On a non-smooth objective a walk's chi2 below the optimum by less than the jumps the
+    health check measured is not a better optimum (no restart of every profile); by more, it
+    is. The optimum is left short by about 1 (its refinement before the walks is skipped)."""
+    problem, short = _short_of_the_minimum(monkeypatch, jump)
     options = WalkOptions(thorough=False)
     result = profile_problem(problem, short, only=["e"], workers=1, options=options)
     assert result.better_optimum_found is restarts
+
+
+def test_a_restart_is_the_same_in_this_process_and_in_two_workers(monkeypatch):
+    """A pass that finds a point below the optimum stops at the first branch, in order, that
+    found one; the restart, and so every profile, is the same whatever the workers' timing."""
+    problem, short = _short_of_the_minimum(monkeypatch, 1e-3)
+    passes: dict[int, list[list[bool]]] = {}
+
+    def recorded(workers):
+        def walk_all(*args, **kwargs):
+            branches = walk(*args, **kwargs)
+            passes.setdefault(workers, []).append([b.better is not None for b in branches])
+            return branches
+
+        return walk_all
+
+    walk = engine.walk_all
+    options = WalkOptions(thorough=False)
+    results = []
+    for workers in (1, 2):
+        monkeypatch.setattr(engine, "walk_all", recorded(workers))
+        results.append(
+            profile_problem(problem, short, only=["e", "g"], workers=workers, options=options)
+        )
+    here, pooled = results
+    assert here.better_optimum_found and pooled.better_optimum_found
+    assert passes[1] == passes[2]
+    first = passes[1][0]
+    assert first[-1] and not any(first[:-1])  # stopped at the first branch with a lower point
+    assert len(first) < 4  # the branches after it were not walked
+    assert passes[1][-1] == [False] * 4  # the last pass walked every branch
+    assert pooled.fit.chi2 == here.fit.chi2
+    for name, p in here.parameters.items():
+        assert pooled.parameters[name].ci_simultaneous == p.ci_simultaneous

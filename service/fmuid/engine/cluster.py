@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
-from fmuid.engine.task import Engine, OnDone, OnEvent, Task, label
+from fmuid.engine.task import Engine, OnDone, OnEvent, Task, Until, first_stop, label
 from fmuid.errors import FmuError
 from fmuid.model.fmu import FmuFile, FmuModel, load_model
 from fmuid.model.registry import get_simulator, mark_reset_unreliable
@@ -101,6 +101,7 @@ class DaskEngine(Engine):
         *,
         on_done: OnDone | None = None,
         on_event: OnEvent | None = None,
+        until: Until | None = None,
     ) -> list[R]:
         """Execute the tasks on dask (see :meth:`Engine.run`); cancel the rest on an error."""
         from distributed import as_completed
@@ -119,6 +120,7 @@ class DaskEngine(Engine):
         ]
         index = {f.key: k for k, f in enumerate(futures)}
         results: dict[int, R] = {}
+        asked, stop = 0, None
         try:
             for future in as_completed(futures):
                 k = index[future.key]
@@ -128,6 +130,9 @@ class DaskEngine(Engine):
                         on_event(k, event)
                 if on_done is not None:
                     on_done(k, results[k])
+                asked, stop = first_stop(results, asked, until)
+                if stop is not None:
+                    break
         finally:
             self._client.cancel([f for f in futures if not f.done()])
-        return [results[k] for k in range(len(tasks))]
+        return [results[k] for k in range(len(tasks) if stop is None else stop + 1)]

@@ -16,7 +16,7 @@ from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
-from fmuid.engine.task import Engine, OnDone, OnEvent, Report, Task, label
+from fmuid.engine.task import Engine, OnDone, OnEvent, Report, Task, Until, label
 
 R = TypeVar("R")
 
@@ -86,6 +86,7 @@ class CountingEngine(Engine):
         *,
         on_done: OnDone | None = None,
         on_event: OnEvent | None = None,
+        until: Until | None = None,
     ) -> list[R]:
         """Execute the tasks on the wrapped engine (see :meth:`Engine.run`), counting them."""
 
@@ -94,5 +95,8 @@ class CountingEngine(Engine):
             if on_done is not None:
                 on_done(k, pair[0])
 
-        pairs = self._engine.run([Counted(t) for t in tasks], on_done=done, on_event=on_event)
+        stop = None if until is None else lambda k, pair: until(k, pair[0])
+        pairs = self._engine.run(
+            [Counted(t) for t in tasks], on_done=done, on_event=on_event, until=stop
+        )
         return [result for result, _ in pairs]

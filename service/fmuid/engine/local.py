@@ -20,8 +20,8 @@ from contextlib import contextmanager
 from typing import Any, TypeVar
 
 from fmuid.engine.guard import die_with_pool_owner
-from fmuid.engine.pool import local_pool
-from fmuid.engine.task import Engine, OnDone, OnEvent, Task
+from fmuid.engine.pool import local_pool, stop_pool
+from fmuid.engine.task import Engine, OnDone, OnEvent, Task, Until, first_stop
 from fmuid.model.fmu import FmuFile, FmuModel, load_model
 from fmuid.model.registry import close_at_exit, get_simulator, mark_reset_unreliable
 
@@ -45,6 +45,7 @@ class SerialEngine(Engine):
         *,
         on_done: OnDone | None = None,
         on_event: OnEvent | None = None,
+        until: Until | None = None,
     ) -> list[R]:
         """Execute the tasks in order (see :meth:`Engine.run`)."""
         results = []
@@ -58,6 +59,8 @@ class SerialEngine(Engine):
             results.append(result)
             if on_done is not None:
                 on_done(k, result)
+            if until is not None and until(k, result):
+                break
         return results
 
 
@@ -87,6 +90,7 @@ class PoolEngine(Engine):
         self._pool = pool
         self._events = events
         self.workers = workers
+        self._abandoned: list[Future[Any]] = []
 
     @classmethod
     @contextmanager
@@ -96,13 +100,17 @@ class PoolEngine(Engine):
         """Yield an engine over ``workers`` processes that simulate ``model``.
 
         ``preload`` names modules the pool's forkserver imports once (those of the tasks).
-        On any exception the workers are ended at once (:func:`fmuid.engine.pool.local_pool`).
+        On any exception the workers are ended at once (:func:`fmuid.engine.pool.local_pool`);
+        so are they on leaving while tasks of a run stopped early still run.
         """
         unreliable = get_simulator(model).reset_reliable is False
         events = multiprocessing.get_context("forkserver").SimpleQueue()
         initargs = (events, os.getpid(), model.file, unreliable)
         with local_pool(workers, _init_worker, initargs, preload=[__name__, *preload]) as pool:
-            yield cls(pool, events, workers)
+            engine = cls(pool, events, workers)
+            yield engine
+            if any(not f.done() for f in engine._abandoned):
+                stop_pool(pool, logging.INFO)
 
     def run(
         self,
@@ -110,6 +118,7 @@ class PoolEngine(Engine):
         *,
         on_done: OnDone | None = None,
         on_event: OnEvent | None = None,
+        until: Until | None = None,
     ) -> list[R]:
         """Execute the tasks in the workers (see :meth:`Engine.run`).
 
@@ -125,6 +134,7 @@ class PoolEngine(Engine):
         }
         results: dict[int, R] = {}
         pending = set(futures)
+        asked = 0
         try:
             while pending:
                 done, pending = wait(pending, timeout=_POLL, return_when=FIRST_COMPLETED)
@@ -134,6 +144,10 @@ class PoolEngine(Engine):
                     results[k] = future.result()
                     if on_done is not None:
                         on_done(k, results[k])
+                asked, stop = first_stop(results, asked, until)
+                if stop is not None:
+                    self._abandoned += [f for f in pending if not f.cancel()]
+                    return [results[k] for k in range(stop + 1)]
         except KeyboardInterrupt:
             log.warning(
                 "interrupted: %d of %d tasks had finished; nothing is kept",

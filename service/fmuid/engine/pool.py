@@ -113,8 +113,11 @@ def local_pool(
     pool.shutdown(wait=True)
 
 
-def stop_pool(pool: ProcessPoolExecutor) -> None:
-    """Cancel what is queued and end the pool's worker processes now (SIGTERM, then SIGKILL)."""
+def stop_pool(pool: ProcessPoolExecutor, level: int = logging.WARNING) -> None:
+    """Cancel what is queued and end the pool's worker processes now (SIGTERM, then SIGKILL).
+
+    ``level``: of the log record that says so (INFO when the tasks are no longer wanted).
+    """
     workers = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     for process in workers:
@@ -125,4 +128,4 @@ def stop_pool(pool: ProcessPoolExecutor) -> None:
         if process.is_alive():
             process.kill()
             process.join(_STOP_WAIT)
-    log.warning("stopped %d worker process(es); their unfinished tasks are lost", len(workers))
+    log.log(level, "stopped %d worker process(es); their unfinished tasks are lost", len(workers))

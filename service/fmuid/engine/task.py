@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Generic, Protocol, TypeVar
 
@@ -18,6 +18,10 @@ OnDone = Callable[[int, Any], None]
 
 OnEvent = Callable[[int, Any], None]
 """Called in the owner with ``(index in tasks, event)`` for each event a task reports."""
+
+Until = Callable[[int, Any], bool]
+"""Asked in the owner with ``(index in tasks, result)``, in the order of the tasks: True stops
+the run there (see :meth:`Engine.run`)."""
 
 
 class Task(Protocol[R_co]):
@@ -45,6 +49,21 @@ class Call(Generic[R]):
         return str(getattr(self.fn, "__qualname__", "call"))
 
 
+def first_stop(
+    results: Mapping[int, Any], start: int, until: Until | None
+) -> tuple[int, int | None]:
+    """Ask ``until`` of the done results from index ``start`` on, in order, up to a gap.
+
+    Returns the next index to ask and the index whose result stopped the run (None: none yet).
+    """
+    k = start
+    while until is not None and k in results:
+        if until(k, results[k]):
+            return k, k
+        k += 1
+    return k, None
+
+
 def label(task: Task[Any]) -> str:
     """Return a task's name for logs and dask keys: its ``label``, else its class name."""
     return str(getattr(task, "label", type(task).__name__))
@@ -60,6 +79,7 @@ class Engine(ABC):
         *,
         on_done: OnDone | None = None,
         on_event: OnEvent | None = None,
+        until: Until | None = None,
     ) -> list[R]:
         """Execute every task and return the results in the order of ``tasks``.
 
@@ -74,11 +94,17 @@ class Engine(ABC):
             Called in this process with ``(index, event)`` for each event the task reports,
             in order and before its ``on_done``: as it happens in this process or a local
             worker, when the task is back on dask.
+        until
+            Asked with ``(index, result)`` of each task once every earlier task is done, in
+            the order of ``tasks``; at the first True the run stops: the tasks after it are
+            cancelled (those running finish unseen, or are ended with the engine). Which task
+            stops the run depends only on the results, not on the engine or its timing.
 
         Returns
         -------
         list
-            The results, in the order of ``tasks``.
+            The results, in the order of ``tasks``; with ``until``, those up to the task that
+            stopped the run.
 
         """
 

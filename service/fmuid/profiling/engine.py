@@ -12,13 +12,13 @@ import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
 from fmuid.engine.count import counting
-from fmuid.engine.run import open_engine
 from fmuid.estimation.optimize import jacobian
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
 from fmuid.estimation.space import z_to_value
 from fmuid.model.registry import fmu_summary
-from fmuid.profiling.branch import BranchResult, BranchTask
+from fmuid.profiling.branch import BranchResult
+from fmuid.profiling.branches import walk_all
 from fmuid.profiling.checks import check_fit, distinct_valleys
 from fmuid.profiling.health import NOISY_FRACTION, Health, check_health
 from fmuid.profiling.intervals import is_flat, label, noise_limited, open_reason, profile_noise
@@ -27,7 +27,7 @@ from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.result import ParameterProfile, ProfilePoint, ProfileQuality, ProfileResult
 from fmuid.profiling.structural import structural_check
 from fmuid.profiling.walk import WalkOptions
-from fmuid.progress import Progress, ProgressCallback
+from fmuid.progress import ProgressCallback
 
 log = logging.getLogger(__name__)
 
@@ -157,12 +157,21 @@ def _profiles(
                 pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
                 fit = refit_optimum(problem, best.z, fit, settle)
         fit_check["simulations"] = checked.simulations
-    for _ in range(MAX_RESTARTS + 1):
+    for attempt in range(MAX_RESTARTS + 1):
         valleys = distinct_valleys(
             pool, problem, WalkPoint(fit.z_estimate(), fit.chi2), fit.chi2 + thr["simultaneous"]
         )
-        branches = _walk_all(
-            problem, fit, names, thr, workers, executor, progress, options, valleys
+        branches = walk_all(
+            problem,
+            fit,
+            names,
+            thr,
+            workers,
+            executor,
+            progress,
+            options,
+            valleys,
+            restart=attempt < MAX_RESTARTS,
         )
         better = [b.better for b in branches if b.better is not None]
         if not better:
@@ -201,66 +210,6 @@ def _non_smooth(options: WalkOptions, health: Health, threshold: float) -> WalkO
     log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
     noise = max(health.chi2_noise.values(), default=0.0) / max(1.0, threshold)
     return replace(options, refit=refit, better_tol=max(options.better_tol, noise))
-
-
-def _walk_all(
-    problem: Problem,
-    fit: FitResult,
-    names: Sequence[str],
-    thr: dict[str, float],
-    workers: int | None,
-    executor: Any,
-    progress: ProgressCallback | None,
-    options: WalkOptions,
-    valleys: Sequence[np.ndarray],
-) -> list[BranchResult]:
-    z_hat = fit.z_estimate()
-    sd = fit.fisher_sd_z()
-    seed = problem.spec.seed
-    tasks = [
-        BranchTask(
-            problem,
-            z_hat,
-            fit.chi2,
-            problem.names.index(n),
-            d,
-            thr["simultaneous"],
-            sd[n],
-            options,
-            pointwise=thr["pointwise"],
-            valleys=tuple(valleys),
-            seed=seed,
-            jacobian=fit.jacobian,
-        )
-        for n in names
-        for d in (-1, 1)
-    ]
-    expected = int(np.ceil(np.sqrt((1.0 + options.margin) / options.rise_per_step))) + 1
-    done: dict[tuple[int, int], int] = {}
-
-    def on_point(k: int, n: int) -> None:
-        done[(tasks[k].index, tasks[k].direction)] = n
-        if progress:
-            per_branch = {
-                (t.index, t.direction): max(done.get((t.index, t.direction), 0), expected)
-                for t in tasks
-            }
-            total = sum(per_branch.values())
-            parts = []
-            for name in names:
-                i = problem.names.index(name)
-                got = done.get((i, -1), 0) + done.get((i, 1), 0)
-                parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
-            progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
-
-    with open_engine(
-        problem.model,
-        workers=workers,
-        executor=executor,
-        at_most=len(tasks),
-        preload=["fmuid.profiling.branch"],
-    ) as engine:
-        return engine.run(tasks, on_event=on_point)
 
 
 def _assemble(

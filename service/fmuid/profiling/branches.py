@@ -1,0 +1,87 @@
+"""Every branch of a profile walked on an engine (local workers, this process or dask)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from fmuid.engine.run import open_engine
+from fmuid.estimation.problem import Problem
+from fmuid.estimation.result import FitResult
+from fmuid.profiling.branch import BranchResult, BranchTask
+from fmuid.profiling.walk import WalkOptions
+from fmuid.progress import Progress, ProgressCallback
+
+
+def walk_all(
+    problem: Problem,
+    fit: FitResult,
+    names: Sequence[str],
+    thr: dict[str, float],
+    workers: int | None,
+    executor: Any,
+    progress: ProgressCallback | None,
+    options: WalkOptions,
+    valleys: Sequence[np.ndarray],
+    restart: bool,
+) -> list[BranchResult]:
+    """Walk every branch of ``names``; return the branches in the order of the tasks.
+
+    With ``restart`` (a lower point will restart the profiles) the walks stop at the first
+    branch, in that order, that found one: the branches before it and that one are returned.
+    """
+    z_hat = fit.z_estimate()
+    sd = fit.fisher_sd_z()
+    seed = problem.spec.seed
+    tasks = [
+        BranchTask(
+            problem,
+            z_hat,
+            fit.chi2,
+            problem.names.index(n),
+            d,
+            thr["simultaneous"],
+            sd[n],
+            options,
+            pointwise=thr["pointwise"],
+            valleys=tuple(valleys),
+            seed=seed,
+            jacobian=fit.jacobian,
+        )
+        for n in names
+        for d in (-1, 1)
+    ]
+    expected = int(np.ceil(np.sqrt((1.0 + options.margin) / options.rise_per_step))) + 1
+    done: dict[tuple[int, int], int] = {}
+
+    def on_point(k: int, n: int) -> None:
+        done[(tasks[k].index, tasks[k].direction)] = n
+        if progress:
+            per_branch = {
+                (t.index, t.direction): max(done.get((t.index, t.direction), 0), expected)
+                for t in tasks
+            }
+            total = sum(per_branch.values())
+            parts = []
+            for name in names:
+                i = problem.names.index(name)
+                got = done.get((i, -1), 0) + done.get((i, 1), 0)
+                parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
+            progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
+
+    with open_engine(
+        problem.model,
+        workers=workers,
+        executor=executor,
+        at_most=len(tasks),
+        preload=["fmuid.profiling.branch"],
+    ) as engine:
+        until = _found_lower if restart else None
+        return engine.run(tasks, on_event=on_point, until=until)
+
+
+def _found_lower(k: int, branch: BranchResult) -> bool:
+    """Whether a branch found a point below the optimum (which restarts the profiles)."""
+    return branch.better is not None
