@@ -155,10 +155,11 @@ def _backward(base: Scanner, steps: list[Step], options: FitOptions, alpha: floa
     while len(steps) > 1:
         final = steps[-1].fit
         values = final.problem.from_z(final.z)
+        scale = step_scale(final.problem)
         trials = []
         for k, s in enumerate(steps):
             kept = [t.effect for j, t in enumerate(steps) if j != k]
-            refit = _refit(base, kept, step_scale(final.problem), values, options)
+            refit = _refit(base, kept, scale, values, options)
             if refit is None:
                 continue
             rise = max(refit[2] - final.chi2, 0.0)
@@ -170,7 +171,7 @@ def _backward(base: Scanner, steps: list[Step], options: FitOptions, alpha: floa
             break
         label = steps[k].effect.label
         log.info("%s: not needed once the others are in (p %.3g); dropped", label, p)
-        shorter = _without(base, steps, k, refit, values, options)
+        shorter = _without(base, steps, k, refit, scale, values, options)
         if shorter is None:
             break
         steps = shorter
@@ -204,17 +205,17 @@ def _without(
     steps: list[Step],
     k: int,
     refit: Refit,
+    scale: float,
     values: dict[str, float],
     options: FitOptions,
 ) -> list[Step] | None:
     """Return the steps without step ``k``, those after it refitted without its effect.
 
     ``refit`` is the fit of every other effect; the cumulative models in between are refitted
-    from ``values`` (the final model's; None when such a refit fails); the last keeps the lower
-    chi2 of its fits.
+    on the fine step ``scale`` from ``values`` (the final model's; None when such a refit
+    fails); the last keeps the lower chi2 of its fits.
     """
     rest = [s for j, s in enumerate(steps) if j != k]
-    scale = step_scale(steps[-1].fit.problem)
     out = rest[: min(k, len(rest) - 1)]
     chi2_before = out[-1].fit.chi2 if out else base.chi2
     for j, s in enumerate(rest[len(out) :], start=len(out)):

@@ -78,9 +78,13 @@ def _init_worker(events: Any, owner: int, fmu: FmuFile, unreliable: bool) -> Non
     _events = events
 
 
-def _execute(k: int, task: Task[R]) -> R:
-    """Execute task ``k`` in a pool worker, its events sent to the owner tagged with ``k``."""
-    return task.execute(lambda event: _events.put((k, event)))
+def _execute(run: int, k: int, task: Task[R]) -> R:
+    """Execute task ``k`` of run ``run`` in a pool worker; its events go to the owner tagged.
+
+    The run's number in the tag keeps a task of a run stopped early, still reporting, out of a
+    later run's events.
+    """
+    return task.execute(lambda event: _events.put((run, k, event)))
 
 
 class PoolEngine(Engine):
@@ -91,6 +95,7 @@ class PoolEngine(Engine):
         self._events = events
         self.workers = workers
         self._abandoned: list[Future[Any]] = []
+        self._runs = 0
 
     @classmethod
     @contextmanager
@@ -129,8 +134,9 @@ class PoolEngine(Engine):
             ends the workers.
 
         """
+        self._runs += 1
         futures: dict[Future[R], int] = {
-            self._pool.submit(_execute, k, task): k for k, task in enumerate(tasks)
+            self._pool.submit(_execute, self._runs, k, task): k for k, task in enumerate(tasks)
         }
         results: dict[int, R] = {}
         pending = set(futures)
@@ -159,8 +165,8 @@ class PoolEngine(Engine):
         return [results[k] for k in range(len(tasks))]
 
     def _drain(self, on_event: OnEvent | None) -> None:
-        """Hand every event in the pipe to ``on_event``."""
+        """Hand every event of the current run in the pipe to ``on_event``."""
         while not self._events.empty():
-            k, event = self._events.get()
-            if on_event is not None:
+            run, k, event = self._events.get()
+            if on_event is not None and run == self._runs:
                 on_event(k, event)

@@ -78,8 +78,8 @@ class FmuRegistry:
         ``parse``: its simulators could not be made from it.
         """
         with self._lock:
-            model = self._by_checksum.get(key)
-            if model is None or not os.path.exists(model.path):
+            model = _existing(self._by_checksum.get(key))
+            if model is None:
                 model = parse()
                 _keep(self._by_checksum, key, model)
             return model
@@ -95,8 +95,7 @@ class FmuRegistry:
             if model is None:
                 model = parse()
                 _keep(self._by_file, key, model)
-                same = self._by_checksum.get((model.sha256, model.interface))
-                if same is None or not os.path.exists(same.path):
+                if _existing(self._by_checksum.get((model.sha256, model.interface))) is None:
                     _keep(self._by_checksum, (model.sha256, model.interface), model)
             return model
 
@@ -153,6 +152,11 @@ class FmuRegistry:
 
 
 K = TypeVar("K")
+
+
+def _existing(model: FmuModel | None) -> FmuModel | None:
+    """Return ``model`` if its file still exists, else None."""
+    return model if model is not None and os.path.exists(model.path) else None
 
 
 def _keep(table: dict[K, FmuModel], key: K, model: FmuModel) -> None:
