@@ -36,6 +36,19 @@ def test_bound_flips_move_each_bound_parameter_but_the_profiled_one():
     assert bound_flips(problem, np.array([0.0, 1.0, 1.0]), 0) == []
 
 
+def test_a_parameter_the_walk_held_on_a_bound_is_flipped_at_an_end_just_beside_it():
+    """Whether a re-fit lands on a bound or a hair inside it is the optimiser's tolerance: a
+    parameter on its upper bound at a walk point and 1e-4 of its span inside it at the end is
+    moved to its lower bound; one never on a bound is left alone."""
+    problem = SimpleNamespace(z_lower=np.zeros(3), z_upper=np.array([1.0, 2.0, 4.0]), n_free=3)
+    end = np.array([0.5, 2.0 - 2e-4, 1.0])
+    path = [np.array([0.1, 1.5, 1.0]), np.array([0.3, 2.0, 1.2])]
+    assert bound_flips(problem, end, 0) == []
+    flips = bound_flips(problem, end, 0, path)
+    assert [list(f) for f in flips] == [[0.5, 0.0, 1.0]]
+    assert bound_flips(problem, end, 0, [np.array([0.1, 1.5, 1.0])]) == []
+
+
 def test_an_end_in_a_valley_behind_the_other_bound_is_the_exact_crossing():
     """The walk follows valley A (``z1`` on its lower bound) and crosses the threshold 5 at
     ``z0 = 0.745``; the profile (lower envelope) crosses in valley B at ``z0 = 2.36`` (closed

@@ -20,7 +20,7 @@ from fmuid.profiling.checks import (
     switches,
 )
 from fmuid.profiling.ends import End, Located, locate
-from fmuid.profiling.points import WalkPoint
+from fmuid.profiling.points import WalkPoint, lower_envelope
 from fmuid.profiling.result import ProfileQuality
 from fmuid.profiling.walk import WalkOptions, first_step, path_tangent, walk
 
@@ -235,6 +235,9 @@ def settle_branch(
             break
         counts.rewalks += 1
         points, better = _rewalk(problem, side, lower, chi2_hat, index, direction, thr, options)
+        points = lower_envelope(
+            points, side[1:], index, float(z_hat[index]), checks.lower_tol * thr
+        )
     for kind, end in ends.items():
         if not end.settled:
             counts.unsettled.append(f"the {kind} end was not located to the tolerance")
@@ -291,7 +294,8 @@ def _sites(
         if kind not in thresholds or end is None or end.point is None or end.z is None:
             continue
         diverse = thorough or not np.isfinite(sd_z) or bool(found)
-        out.append((end.point, diverse, bound_flips(problem, end.point.z, index), "end"))
+        path = [p.z for p in side if p.ok]
+        out.append((end.point, diverse, bound_flips(problem, end.point.z, index, path), "end"))
     out.extend((side[k], True, [], "jump") for k in found)
     return out
 

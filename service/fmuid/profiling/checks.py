@@ -124,24 +124,32 @@ def refit_from(
     return out
 
 
-def bound_flips(problem: Problem, z: np.ndarray, index: int) -> list[np.ndarray]:
-    """Return ``z`` with one other parameter on a bound moved to its other bound, per parameter.
+def bound_flips(
+    problem: Problem, z: np.ndarray, index: int, path: Sequence[np.ndarray] = ()
+) -> list[np.ndarray]:
+    """Return ``z`` with one other parameter moved to the far side of a bound, per parameter.
 
     A parameter is on a bound when it lies within ``BOUND_TOLERANCE`` (1e-6) of its span of
     the bound, in fitted coordinates (the level of :meth:`fmuid.estimation.space.
     ParameterSpace.at_bound`). A re-fit from ``z`` holds such a parameter there; the valley
     with the parameter on its other bound is reached only from the other side of the ridge
-    between them, which the diverse starts cross by luck. Parameter ``index`` (the profiled
-    one) is left out; the other parameters stay as in ``z``. Empty when none is on a bound.
+    between them, which the diverse starts cross by luck. A parameter on a bound at a point of
+    ``path`` (the walk towards ``z``) and off it at ``z`` is moved to its other bound too:
+    whether a re-fit lands on the bound or just beside it depends on the optimiser's
+    tolerances, not on the valley. Parameter ``index`` (the profiled one) is left out; the
+    other parameters stay as in ``z``. Empty when none was on a bound.
     """
     lo, hi = problem.z_lower, problem.z_upper
     tol = BOUND_TOLERANCE * (hi - lo)
     out = []
     for k in range(len(lo)):
-        if k == index or lo[k] + tol[k] < z[k] < hi[k] - tol[k]:
+        if k == index:
+            continue
+        held = [p[k] for p in (z, *path) if not lo[k] + tol[k] < p[k] < hi[k] - tol[k]]
+        if not held:
             continue
         start = np.array(z, dtype=float)
-        start[k] = hi[k] if z[k] <= lo[k] + tol[k] else lo[k]
+        start[k] = hi[k] if held[0] <= lo[k] + tol[k] else lo[k]
         out.append(start)
     return out
 

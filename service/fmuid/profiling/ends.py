@@ -310,10 +310,11 @@ def fresh_refit(
 
     The Gauss-Newton steps (:func:`fmuid.profiling.quasi.quasi_refit`, when ``newton``) stop
     when the next would lower chi2 by less than ``tolerance``; where they do not settle,
-    ``refine`` runs from ``start``. Returns the point, its chi2 and whether Gauss-Newton is
-    worth trying at the next guess of this crossing (not after it failed here, nor for
-    polished re-fits: a non-smooth objective, where finite differences mislead). ``secant``:
-    the Jacobian carried along a walk, renewed here (a new one by default).
+    ``refine`` runs from the lowest point they reached. Returns the point, its chi2 and
+    whether Gauss-Newton is worth trying at the next guess of this crossing (not after it
+    failed here, nor for polished re-fits: a non-smooth objective, where finite differences
+    mislead). ``secant``: the Jacobian carried along a walk, renewed here (a new one by
+    default).
     """
     if newton:
         if secant is None:
@@ -321,6 +322,8 @@ def fresh_refit(
         cheap = quasi_refit(problem, start, free, secant, tolerance, options.diff_step, fresh=True)
         if cheap is not None and cheap[2]:
             return cheap[0], cheap[1], True
+        if cheap is not None:
+            start = cheap[0]
     z, chi2, _ = refine(problem, start, free=free, options=options)
     return z, chi2, False
 

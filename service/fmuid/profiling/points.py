@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,3 +28,39 @@ class WalkPoint:
     def ok(self) -> bool:
         """Whether the re-fit there succeeded with a finite chi2."""
         return self.error is None and bool(np.isfinite(self.chi2))
+
+
+def lower_envelope(
+    new: Sequence[WalkPoint], old: Sequence[WalkPoint], index: int, origin: float, tol: float
+) -> list[WalkPoint]:
+    """Return the points of two walks of one branch on their lower envelope, from ``origin`` out.
+
+    A re-walk from a lower valley (``new``) follows that valley outwards; where the walk before
+    it (``old``) was lower, further out, its points are the profile there (every point is a
+    re-fit at its own value of parameter ``index``, an upper bound of the profile). A point of
+    either walk is left out when the other walk's straight line between its neighbours (at
+    equal values, the other's point) lies more than ``tol`` below it; points outside the other
+    walk's reach stay. Failed points of ``new`` stay.
+    """
+
+    def dist(p: WalkPoint) -> float:
+        return abs(float(p.z[index]) - origin)
+
+    def below(p: WalkPoint, path: list[WalkPoint]) -> bool:
+        """Whether ``path``'s straight line at ``p``'s distance lies ``tol`` below ``p``."""
+        d = dist(p)
+        inner = [q for q in path if dist(q) <= d]
+        outer = [q for q in path if dist(q) >= d]
+        if not inner or not outer:
+            return False
+        a, b = max(inner, key=dist), min(outer, key=dist)
+        if dist(b) == dist(a):
+            return min(a.chi2, b.chi2) < p.chi2 - tol
+        level = a.chi2 + (b.chi2 - a.chi2) * (d - dist(a)) / (dist(b) - dist(a))
+        return level < p.chi2 - tol
+
+    fresh = [p for p in new if p.ok]
+    former = [p for p in old if p.ok and all(p is not q for q in new)]
+    kept = [p for p in former if not below(p, fresh)]
+    kept += [p for p in new if not p.ok or not below(p, former)]
+    return sorted(kept, key=dist)

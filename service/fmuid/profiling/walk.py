@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -47,7 +47,8 @@ class WalkOptions:
         jumps is not resolved; the thorough profile restarts for it, its ends measured from
         the lowest optimum found).
     refit
-        Tolerances of the re-fit of the other parameters at each point (and at the ends).
+        Tolerances of the re-fit of the other parameters at the ends and at each point (where
+        ``ftol`` is raised to the walk's own tolerance: :func:`walk_refit`).
     end_tolerance
         CI ends are located to this fraction of their half-width.
     checks
@@ -178,6 +179,7 @@ def walk(
     if jacobian is not None and options.quasi_tol > 0 and not options.refit.polish:
         secant = Secant(-np.array(jacobian, dtype=float), path[-1].z.copy())
     stop = threshold * (1.0 + options.margin)
+    settle = walk_refit(options, threshold, chi2_hat)
     if last_ok.chi2 - chi2_hat > stop and options.overshoot <= 0:
         return points, None
     while len(points) < options.max_points:
@@ -210,7 +212,7 @@ def walk(
                 if misses >= MAX_MISSES:
                     secant = None
                 start = guess if cheap is None else cheap[0]
-                z, chi2, _ = refine(problem, start, free=free, options=options.refit)
+                z, chi2, _ = refine(problem, start, free=free, options=settle)
         except FmuidError as exc:
             z, chi2 = guess, float("nan")
             points.append(WalkPoint(guess, chi2, str(exc)))
@@ -257,6 +259,21 @@ def walk(
             )
         )
     return points, None
+
+
+def walk_refit(options: WalkOptions, threshold: float, chi2_hat: float) -> FitOptions:
+    """Tolerances of a walk point's trust-region re-fit: it stops at the walk's own tolerance.
+
+    A walk point only has to decide where the next step goes and which side of a threshold it
+    lies on (the ends are located by their own re-fits); trust region in a curved valley takes
+    many short steps, each with a finite-difference Jacobian, so ``ftol`` is raised until a
+    step that lowers chi2 by less than ``quasi_tol`` of the threshold ends it (the Gauss-Newton
+    points' tolerance; unchanged for polished re-fits, where ``quasi_tol`` is 0).
+    """
+    if options.quasi_tol <= 0.0:
+        return options.refit
+    ftol = options.quasi_tol * threshold / max(chi2_hat, 1.0)
+    return replace(options.refit, ftol=max(options.refit.ftol, ftol))
 
 
 def path_tangent(jacobian: np.ndarray, index: int) -> np.ndarray | None:
