@@ -76,8 +76,8 @@ def settle_branch(
     reached another minimum than the walked one, or ``thorough`` is set, from diverse starts:
     seeded Latin-hypercube points at the first such site, and at later
     sites the distinct basins those starts reached (:func:`fmuid.profiling.checks.basins`),
-    moved to the site. An end where other parameters sit on a bound is re-fitted once more per
-    such parameter, from the end with it moved to its other bound
+    moved to the site. An end where other parameters sit on a bound (there or at a point of the
+    walk) is re-fitted once more per such parameter, from the end with it moved to its other bound
     (:func:`fmuid.profiling.checks.bound_flips`): the valley on the other side of that bound
     is found by the profile's shape, not by the diverse starts' luck; at the inner (pointwise)
     end such a flip starts from the outer end's re-fit of it, or is left out when that came
@@ -86,8 +86,10 @@ def settle_branch(
     minimum it already knows (the checked point, the check's earlier re-fits) ends there
     (:func:`fmuid.profiling.checks.refit_from`). A lower chi2 there means
     the walk followed a higher valley: the stretch towards the estimate is re-walked from the
-    lower valley, the walk goes on outwards from it, and the ends are located again (brackets
-    the re-walk left as they were are not located again: :class:`fmuid.profiling.ends.Located`).
+    lower valley, the walk goes on outwards from it, the branch keeps the lower envelope of the
+    re-walk and the walk before it (:func:`fmuid.profiling.points.lower_envelope`), and the
+    ends are located again (brackets the re-walk left as they were are not located again:
+    :class:`fmuid.profiling.ends.Located`).
 
     Parameters
     ----------
@@ -280,21 +282,22 @@ def _sites(
     re-fitted from the valley the walk switched to (one re-fit from a nearby minimum; the point
     after it needs none: its re-fit started from the old valley and descended out of it); then
     the outermost end, the other end and the jumps of the chi2 path. An end where other
-    parameters sit on a bound is also re-fitted once per such parameter with it moved to its
-    other bound (:func:`fmuid.profiling.checks.bound_flips`; the outer end's first, the inner
-    end's from its re-fits: :func:`fmuid.profiling.checks.inner_flips`).
+    parameters sit on a bound (there or at a point of the walk) is also re-fitted once per such
+    parameter with it moved to its other bound (:func:`fmuid.profiling.checks.bound_flips`;
+    the outer end's first, the inner end's from its re-fits:
+    :func:`fmuid.profiling.checks.inner_flips`).
     """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
     out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []
     for k in switches(side, index, problem.z_lower, problem.z_upper, tangent):
         before = max(j for j in range(k) if side[j].ok)
         out.append((side[before], False, [side[k].z], "switch"))
+    diverse = thorough or not np.isfinite(sd_z) or bool(found)
+    path = [p.z for p in side if p.ok]
     for kind in ("simultaneous", "pointwise"):
         end = ends.get(kind)
         if kind not in thresholds or end is None or end.point is None or end.z is None:
             continue
-        diverse = thorough or not np.isfinite(sd_z) or bool(found)
-        path = [p.z for p in side if p.ok]
         out.append((end.point, diverse, bound_flips(problem, end.point.z, index, path), "end"))
     out.extend((side[k], True, [], "jump") for k in found)
     return out

@@ -268,7 +268,7 @@ def walk_refit(options: WalkOptions, threshold: float, chi2_hat: float) -> FitOp
     lies on (the ends are located by their own re-fits); trust region in a curved valley takes
     many short steps, each with a finite-difference Jacobian, so ``ftol`` is raised until a
     step that lowers chi2 by less than ``quasi_tol`` of the threshold ends it (the Gauss-Newton
-    points' tolerance; unchanged for polished re-fits, where ``quasi_tol`` is 0).
+    points' tolerance; unchanged where ``quasi_tol`` is 0).
     """
     if options.quasi_tol <= 0.0:
         return options.refit
