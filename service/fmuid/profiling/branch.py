@@ -13,7 +13,7 @@ from fmuid.profiling.checks import (
     basins,
     bound_flips,
     diverse_starts,
-    inner_flips,
+    flip_starts,
     jumps,
     refit_from,
     same_basin,
@@ -79,12 +79,13 @@ def settle_branch(
     moved to the site. An end where other parameters sit on a bound (there or at a point of the
     walk) is re-fitted once more per such parameter, from the end with it moved to its other bound
     (:func:`fmuid.profiling.checks.bound_flips`): the valley on the other side of that bound
-    is found by the profile's shape, not by the diverse starts' luck; at the inner (pointwise)
-    end such a flip starts from the outer end's re-fit of it, or is left out when that came
-    back into the walked valley and the walk has no jump or switch
-    (:func:`fmuid.profiling.checks.inner_flips`). A check's re-fit that enters the basin of a
-    minimum it already knows (the checked point, the check's earlier re-fits) ends there
-    (:func:`fmuid.profiling.checks.refit_from`). A lower chi2 there means
+    is found by the profile's shape, not by the diverse starts' luck. A flip starts from the
+    minimum an earlier flip of the same parameter to the same bound reached at another end of
+    the branch (in any round) where that left the walked valley, and at the inner (pointwise)
+    end it is left out when the outer end's came back into the walked valley and the walk has
+    no jump or switch (:func:`fmuid.profiling.checks.flip_starts`). A check's re-fit that
+    enters the basin of a minimum it already knows (the checked point, the check's earlier
+    re-fits) ends there (:func:`fmuid.profiling.checks.refit_from`). A lower chi2 there means
     the walk followed a higher valley: the stretch towards the estimate is re-walked from the
     lower valley, the walk goes on outwards from it, the branch keeps the lower envelope of the
     re-walk and the walk before it (:func:`fmuid.profiling.points.lower_envelope`), and the
@@ -143,6 +144,7 @@ def settle_branch(
     checks = options.checks
     tangent = None if jacobian is None else path_tangent(jacobian, index)
     located = Located()
+    behind: dict[tuple[int, float], WalkPoint] = {}
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
             break
@@ -180,8 +182,8 @@ def settle_branch(
         lower = None
         for site, diverse, near, why in sites:
             bound = why == "end" and bool(near)
-            if why == "end" and outer is not None:
-                near = inner_flips(near, site.z, outer, smooth)
+            keyed = flip_starts(near, site.z, outer, behind, smooth) if bound else []
+            near = [start for _, start in keyed] if bound else near
             if not valleys and not diverse and not near:
                 continue
             zi = float(site.z[index])
@@ -191,16 +193,19 @@ def settle_branch(
                 found = refit_from(problem, index, zi, valleys, checks.refit, settled, tol)
                 flipped: dict[tuple[int, float], WalkPoint | None] = {}
                 reached = False
-                for start in near:
+                for n, start in enumerate(near):
                     got = refit_from(
                         problem, index, zi, [start], checks.refit, [*settled, *found], tol
                     )
                     found += got
                     back = not got or same_basin(problem, got[0].z, site.z)
                     reached = reached or (bound and not back)
-                    if bound and outer is None and got:
-                        k = int(np.flatnonzero(start != site.z)[0])
-                        flipped[(k, float(start[k]))] = None if back else got[0]
+                    if bound and got:
+                        key = keyed[n][0]
+                        if not back:
+                            behind[key] = got[0]
+                        if outer is None:
+                            flipped[key] = None if back else got[0]
                 if bound and outer is None:
                     outer = flipped
                 others: list[np.ndarray] = []
@@ -284,8 +289,7 @@ def _sites(
     the outermost end, the other end and the jumps of the chi2 path. An end where other
     parameters sit on a bound (there or at a point of the walk) is also re-fitted once per such
     parameter with it moved to its other bound (:func:`fmuid.profiling.checks.bound_flips`;
-    the outer end's first, the inner end's from its re-fits:
-    :func:`fmuid.profiling.checks.inner_flips`).
+    the outer end's first: :func:`fmuid.profiling.checks.flip_starts`).
     """
     found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
     out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []

@@ -192,33 +192,39 @@ def same_basin(problem: Problem, a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.max(np.abs(a - b) / (problem.z_upper - problem.z_lower)) <= BASIN)
 
 
-def inner_flips(
+def flip_key(start: np.ndarray, z: np.ndarray) -> tuple[int, float]:
+    """Return the parameter a bound flip of ``z`` moved and the bound it moved it to."""
+    k = int(np.flatnonzero(start != z)[0])
+    return k, float(start[k])
+
+
+def flip_starts(
     flips: Sequence[np.ndarray],
     z: np.ndarray,
-    outer: dict[tuple[int, float], WalkPoint | None],
+    outer: dict[tuple[int, float], WalkPoint | None] | None,
+    behind: dict[tuple[int, float], WalkPoint],
     smooth: bool,
-) -> list[np.ndarray]:
-    """Return the starts of the bound flips at a branch's inner (pointwise) end at ``z``.
+) -> list[tuple[tuple[int, float], np.ndarray]]:
+    """Return the bound flips of an end at ``z`` to re-fit, each as ``(key, start)``.
 
-    ``outer`` holds the re-fits of the flips at the outer (simultaneous) end of the same walk,
-    keyed by the flipped parameter and the bound it was moved to: ``None`` when that re-fit
-    came back into the outer end's own valley. A flip made there too starts from its re-fit
-    when that reached another minimum (the valley behind the bound, followed to this end from
-    nearby rather than crossed to again), and is left out when it came back and the walk is
-    ``smooth`` (no jump of its chi2 path, no switch of valley): the valley behind the bound,
-    not lower at the outer end, would have to cross the walked one twice between the ends to
-    be lower here (at the optimum the walked valley is the lowest). Other flips are kept.
+    ``key`` is :func:`flip_key` of the flip. ``behind`` holds, per key, the last minimum a
+    flip of that key reached at an earlier end of the branch (in this round or an earlier one)
+    other than that end's walked valley: the valley behind the bound. A flip whose key is there
+    starts from that minimum (followed to this end from nearby rather than crossed to again
+    from the far bound, where the model may be far off and the descent costs many runs).
+    ``outer`` (``None`` at the round's outer, simultaneous, end) holds the round's re-fits of
+    the flips at its outer end, ``None`` for those that came back into the outer end's own
+    valley; at the inner (pointwise) end such a flip is left out when the walk is ``smooth``
+    (no jump of its chi2 path, no switch of valley): the valley behind the bound, not lower at
+    the outer end, would have to cross the walked one twice between the ends to be lower here
+    (at the optimum the walked valley is the lowest). Other flips start from the far bound.
     """
     out = []
     for start in flips:
-        k = int(np.flatnonzero(start != z)[0])
-        key = (k, float(start[k]))
-        if key not in outer:
-            out.append(start)
-        elif outer[key] is not None:
-            out.append(outer[key].z)  # type: ignore[union-attr]
-        elif not smooth:
-            out.append(start)
+        key = flip_key(start, z)
+        if outer is not None and key in outer and outer[key] is None and smooth:
+            continue
+        out.append((key, behind[key].z if key in behind else start))
     return out
 
 
