@@ -156,6 +156,7 @@ class FmuModel:
         self, path: str | Path, interface: str | None = None, *, sha256: str | None = None
     ) -> None:
         self.path = Path(path)
+        self._resolved = str(self.path.resolve())
         archive = open_archive(self.path)
         self.sha256 = hashlib.sha256(archive.data).hexdigest()
         registry().count_parse()
@@ -202,8 +203,11 @@ class FmuModel:
 
     @property
     def key(self) -> tuple[str, str, str]:
-        """What identifies this model's simulators: checksum, resolved file, interface."""
-        return (self.sha256, str(self.path.resolve()), self.interface)
+        """What identifies this model's simulators: checksum, resolved file, interface.
+
+        The file is resolved when it is parsed (the key is asked for on every simulation).
+        """
+        return (self.sha256, self._resolved, self.interface)
 
     @property
     def file(self) -> FmuFile:
