@@ -30,7 +30,8 @@ class BranchResult:
     """The points of one branch, from the estimate outwards (estimate not included).
 
     ``ends`` maps ``"pointwise"`` and ``"simultaneous"`` to the located crossings; ``better``
-    is a point below the optimum when one was met (the branch stops there).
+    is a point below the optimum when one was met (the branch stops there); ``minima`` are
+    the minima its checks' re-fits reached (parameter ``index`` held at a check's site).
     """
 
     index: int
@@ -39,6 +40,7 @@ class BranchResult:
     better: WalkPoint | None
     ends: dict[str, End] = field(default_factory=dict)
     quality: ProfileQuality = ProfileQuality()
+    minima: tuple[WalkPoint, ...] = ()
 
 
 @dataclass
@@ -145,6 +147,7 @@ def settle_branch(
     tangent = None if jacobian is None else path_tangent(jacobian, index)
     located = Located()
     behind: dict[tuple[int, float], WalkPoint] = {}
+    minima: list[WalkPoint] = []
     for round_ in range(checks.max_rewalks + 1):
         if better is not None:
             break
@@ -222,6 +225,7 @@ def settle_branch(
                 if others:
                     known = basins(problem, from_others, [site, *found], checks.end_starts)
             found = found + from_others
+            minima += [p for p in found if p is not site]
             counts.check_sims += checked.simulations
             counts.checks += 1
             counts.starts += len(valleys) + len(others) + len(near)
@@ -263,7 +267,7 @@ def settle_branch(
         unsettled=tuple(counts.unsettled),
         check_simulations=counts.check_sims,
     )
-    return BranchResult(index, direction, points, better, ends, quality)
+    return BranchResult(index, direction, points, better, ends, quality, tuple(minima))
 
 
 def _sites(

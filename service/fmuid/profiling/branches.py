@@ -26,11 +26,14 @@ def walk_all(
     options: WalkOptions,
     valleys: Sequence[np.ndarray],
     restart: bool,
+    again: dict[tuple[int, int], np.ndarray] | None = None,
 ) -> list[BranchResult]:
     """Walk every branch of ``names``; return the branches in the order of the tasks.
 
     With ``restart`` (a lower point will restart the profiles) the walks stop at the first
     branch, in that order, that found one: the branches before it and that one are returned.
+    ``again`` (``(index, direction)`` -> a point): walk only those branches, each with its
+    point as one more valley (:func:`fmuid.profiling.cross.cross_check`).
     """
     z_hat = fit.z_estimate()
     sd = fit.fisher_sd_z()
@@ -46,12 +49,13 @@ def walk_all(
             sd[n],
             options,
             pointwise=thr["pointwise"],
-            valleys=tuple(valleys),
+            valleys=tuple(valleys) + extra,
             seed=seed,
             jacobian=fit.jacobian,
         )
         for n in names
         for d in (-1, 1)
+        for extra in _extra(again, problem.names.index(n), d)
     ]
     expected = int(np.ceil(np.sqrt((1.0 + options.margin) / options.rise_per_step))) + 1
     done: dict[tuple[int, int], int] = {}
@@ -68,7 +72,9 @@ def walk_all(
             for name in names:
                 i = problem.names.index(name)
                 got = done.get((i, -1), 0) + done.get((i, 1), 0)
-                parts.append(f"{name} {got}/{per_branch[(i, -1)] + per_branch[(i, 1)]}")
+                planned = per_branch.get((i, -1), 0) + per_branch.get((i, 1), 0)
+                if planned:
+                    parts.append(f"{name} {got}/{planned}")
             progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
 
     with open_engine(
@@ -85,3 +91,13 @@ def walk_all(
 def _found_lower(k: int, branch: BranchResult) -> bool:
     """Whether a branch found a point below the optimum (which restarts the profiles)."""
     return branch.better is not None
+
+
+def _extra(
+    again: dict[tuple[int, int], np.ndarray] | None, index: int, direction: int
+) -> list[tuple[np.ndarray, ...]]:
+    """Return the extra valleys of a branch's task: none, or no task where ``again`` omits it."""
+    if again is None:
+        return [()]
+    point = again.get((index, direction))
+    return [] if point is None else [(point,)]

@@ -6,6 +6,7 @@ import logging
 import time
 from collections.abc import Sequence
 from dataclasses import replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ from fmuid.model.registry import fmu_summary
 from fmuid.profiling.branch import BranchResult
 from fmuid.profiling.branches import walk_all
 from fmuid.profiling.checks import check_fit, distinct_valleys
+from fmuid.profiling.cross import CrossRecord, cross_check
 from fmuid.profiling.health import NOISY_FRACTION, Health, check_health
 from fmuid.profiling.intervals import is_flat, label, noise_limited, open_reason, profile_noise
 from fmuid.profiling.optimum import descend, refit_optimum
@@ -157,11 +159,13 @@ def _profiles(
                 pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
                 fit = refit_optimum(problem, best.z, fit, settle)
         fit_check["simulations"] = checked.simulations
+    cross = CrossRecord()
     for attempt in range(MAX_RESTARTS + 1):
         valleys = distinct_valleys(
             pool, problem, WalkPoint(fit.z_estimate(), fit.chi2), fit.chi2 + thr["simultaneous"]
         )
-        branches = walk_all(
+        walk = partial(
+            walk_all,
             problem,
             fit,
             names,
@@ -173,6 +177,9 @@ def _profiles(
             valleys,
             restart=attempt < MAX_RESTARTS,
         )
+        branches = walk()
+        if all(b.better is None for b in branches):
+            branches = cross_check(problem, branches, fit.chi2, thr, options, walk, cross)
         better = [b.better for b in branches if b.better is not None]
         if not better:
             break
@@ -192,7 +199,8 @@ def _profiles(
         floor = health.chi2_noise.get(name, 0.0) if options.overshoot else None
         profiles[name] = _assemble(problem, fit, i, sides, thr, sd[name], check, floor)
     fit_check["valleys"] = len(valleys)
-    return fit, profiles, better_found, check, {"health": health.to_dict(), "fit": fit_check}
+    checks = {"health": health.to_dict(), "fit": fit_check, "cross": cross.to_dict()}
+    return fit, profiles, better_found, check, checks
 
 
 def _non_smooth(options: WalkOptions, health: Health, threshold: float) -> WalkOptions:

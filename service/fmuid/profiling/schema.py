@@ -155,11 +155,23 @@ class FitCheckOut(Block):
     valleys: int | None = omitted_if_none("Distinct valleys the walks started from.")
 
 
+class CrossCheckOut(Block):
+    """The branches checked against each other (:mod:`fmuid.profiling.cross`)."""
+
+    ends: int = 0
+    probes: int = 0
+    resettled: int = 0
+    simulations: int = 0
+
+
 class ChecksOut(Block):
-    """The checks made before the profiles (none in results of before 2026-10)."""
+    """The checks made before the profiles (none in results of before 2026-10) and after."""
 
     health: HealthOut | None = omitted_if_none()
     fit: FitCheckOut | None = omitted_if_none()
+    cross: CrossCheckOut | None = omitted_if_none(
+        "Ends another parameter's points lay beyond, re-fits there, branches settled again."
+    )
 
 
 class ProfileResultOut(EstimatedBlock):
