@@ -14,6 +14,7 @@ made when no point lies beyond an end.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
@@ -25,6 +26,8 @@ from fmuid.profiling.branch import BranchResult
 from fmuid.profiling.checks import refit_from
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.walk import WalkOptions
+
+log = logging.getLogger(__name__)
 
 #: Re-fits at one end, from the lowest points beyond it and the farthest one.
 PROBES = 2
@@ -113,6 +116,12 @@ def cross_check(
     record.simulations += spent.simulations
     if not redo:
         return branches
+    log.info(
+        "points of other profiles lie under the threshold beyond %d branch end(s): "
+        "settling %s again",
+        len(redo),
+        sorted(redo),
+    )
     record.resettled += len(redo)
     again = {(b.index, b.direction): b for b in settle(again=redo)}
     return [again.get((b.index, b.direction), b) for b in branches]
