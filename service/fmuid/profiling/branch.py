@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -148,17 +148,15 @@ def settle_branch(
     located = Located()
     behind: dict[tuple[int, float], WalkPoint] = {}
     minima: list[WalkPoint] = []
-    for round_ in range(checks.max_rewalks + 1):
-        if better is not None:
-            break
-        side = [estimate] + points
-        ends = {
-            kind: locate(
+
+    def end_of(kind: str, side: list[WalkPoint]) -> End:
+        if kind not in ends:
+            ends[kind] = locate(
                 problem,
                 index,
                 chi2_hat,
                 float(z_hat[index]),
-                t,
+                thresholds[kind],
                 side,
                 options.refit,
                 options.end_tolerance,
@@ -166,21 +164,28 @@ def settle_branch(
                 tangent=tangent,
                 located=located,
             )
-            for kind, t in thresholds.items()
-        }
+        return ends[kind]
+
+    side = [estimate] + points
+    for round_ in range(checks.max_rewalks + 1):
+        if better is not None:
+            break
+        side = [estimate] + points
+        ends.clear()
+        kinks = switches(side, index, problem.z_lower, problem.z_upper, tangent)
+        bends = jumps(side, index, chi2_hat, thr)
+        counts.jumps = max(counts.jumps, len(kinks) + len(bends))
+        smooth = not kinks and not bends
         sites = _sites(
             problem,
             index,
             side,
-            ends,
-            chi2_hat,
+            (kinks, bends),
+            end_of,
             thresholds,
             sd_z,
             thorough or checks.always,
-            tangent,
         )
-        counts.jumps = max(counts.jumps, sum(1 for *_, why in sites if why != "end"))
-        smooth = all(why == "end" for *_, why in sites)
         outer: dict[tuple[int, float], WalkPoint | None] | None = None
         lower = None
         for site, diverse, near, why in sites:
@@ -249,6 +254,9 @@ def settle_branch(
         points = lower_envelope(
             points, side[1:], index, float(z_hat[index]), checks.lower_tol * thr
         )
+    if better is None or ends:  # as when the ends were located before the round's checks
+        for kind in thresholds:
+            end_of(kind, side)
     for kind, end in ends.items():
         if not end.settled:
             counts.unsettled.append(f"the {kind} end was not located to the tolerance")
@@ -274,41 +282,46 @@ def _sites(
     problem: Problem,
     index: int,
     side: list[WalkPoint],
-    ends: dict[str, End],
-    chi2_hat: float,
+    marks: tuple[list[int], list[int]],
+    end_of: Callable[[str, list[WalkPoint]], End],
     thresholds: dict[str, float],
     sd_z: float,
     thorough: bool,
-    tangent: np.ndarray | None,
-) -> list[tuple[WalkPoint, bool, list[np.ndarray], str]]:
+) -> Iterator[tuple[WalkPoint, bool, list[np.ndarray], str]]:
     """Points to check: ``(point, with diverse starts, neighbours' starts, why)``.
 
-    The diverse starts are marked where the chi2 path jumps or bends, the Fisher deviation is
-    infinite or ``thorough`` is set; at an end with bound flips the caller adds them when a
-    flip reached another minimum (a second valley on the far side of the bound).
+    ``marks`` are the positions in ``side`` after a switch of valley
+    (:func:`fmuid.profiling.checks.switches`) and where the chi2 path jumps or bends
+    (:func:`fmuid.profiling.checks.jumps`). The diverse starts are marked where the chi2 path
+    jumps or bends, the Fisher deviation is infinite or ``thorough`` is set; at an end with
+    bound flips the caller adds them when a flip reached another minimum (a second valley on
+    the far side of the bound).
 
-    First the point before each switch of valley (:func:`fmuid.profiling.checks.switches`),
-    re-fitted from the valley the walk switched to (one re-fit from a nearby minimum; the point
-    after it needs none: its re-fit started from the old valley and descended out of it); then
-    the outermost end, the other end and the jumps of the chi2 path. An end where other
-    parameters sit on a bound (there or at a point of the walk) is also re-fitted once per such
-    parameter with it moved to its other bound (:func:`fmuid.profiling.checks.bound_flips`;
-    the outer end's first: :func:`fmuid.profiling.checks.flip_starts`).
+    First the point before each switch of valley, re-fitted from the valley the walk switched
+    to (one re-fit from a nearby minimum; the point after it needs none: its re-fit started
+    from the old valley and descended out of it); then the outermost end, the other end and the
+    jumps of the chi2 path. An end is located (``end_of``) only when its turn comes: a check
+    before it that finds a lower valley re-walks the branch, and the ends are located on the
+    re-walked one. An end where other parameters sit on a bound (there or at a point of the
+    walk) is also re-fitted once per such parameter with it moved to its other bound
+    (:func:`fmuid.profiling.checks.bound_flips`; the outer end's first:
+    :func:`fmuid.profiling.checks.flip_starts`).
     """
-    found = jumps(side, index, chi2_hat, thresholds["simultaneous"])
-    out: list[tuple[WalkPoint, bool, list[np.ndarray], str]] = []
-    for k in switches(side, index, problem.z_lower, problem.z_upper, tangent):
+    kinks, bends = marks
+    for k in kinks:
         before = max(j for j in range(k) if side[j].ok)
-        out.append((side[before], False, [side[k].z], "switch"))
-    diverse = thorough or not np.isfinite(sd_z) or bool(found)
+        yield side[before], False, [side[k].z], "switch"
+    diverse = thorough or not np.isfinite(sd_z) or bool(bends)
     path = [p.z for p in side if p.ok]
     for kind in ("simultaneous", "pointwise"):
-        end = ends.get(kind)
-        if kind not in thresholds or end is None or end.point is None or end.z is None:
+        if kind not in thresholds:
             continue
-        out.append((end.point, diverse, bound_flips(problem, end.point.z, index, path), "end"))
-    out.extend((side[k], True, [], "jump") for k in found)
-    return out
+        end = end_of(kind, side)
+        if end.point is None or end.z is None:
+            continue
+        yield end.point, diverse, bound_flips(problem, end.point.z, index, path), "end"
+    for k in bends:
+        yield side[k], True, [], "jump"
 
 
 def _rewalk(
