@@ -22,6 +22,7 @@ from fmuid.profiling.checks import (
 from fmuid.profiling.ends import End, Located, locate
 from fmuid.profiling.points import WalkPoint, lower_envelope
 from fmuid.profiling.result import ProfileQuality
+from fmuid.profiling.rewalk import Memo, refit_once, rewalk
 from fmuid.profiling.walk import WalkOptions, first_step, path_tangent, walk
 
 
@@ -148,6 +149,7 @@ def settle_branch(
     located = Located()
     behind: dict[tuple[int, float], WalkPoint] = {}
     minima: list[WalkPoint] = []
+    memo: Memo = {}
 
     def end_of(kind: str, side: list[WalkPoint]) -> End:
         if kind not in ends:
@@ -202,8 +204,8 @@ def settle_branch(
                 flipped: dict[tuple[int, float], WalkPoint | None] = {}
                 reached = False
                 for n, start in enumerate(near):
-                    got = refit_from(
-                        problem, index, zi, [start], checks.refit, [*settled, *found], tol
+                    got = refit_once(
+                        memo, problem, index, zi, start, checks.refit, [*settled, *found], tol
                     )
                     found += got
                     back = not got or same_basin(problem, got[0].z, site.z)
@@ -250,7 +252,9 @@ def settle_branch(
             counts.unsettled.append("a lower valley was still found after the last re-walk")
             break
         counts.rewalks += 1
-        points, better = _rewalk(problem, side, lower, chi2_hat, index, direction, thr, options)
+        points, better = rewalk(
+            problem, side, lower, chi2_hat, index, direction, thr, options, memo
+        )
         points = lower_envelope(
             points, side[1:], index, float(z_hat[index]), checks.lower_tol * thr
         )
@@ -322,39 +326,6 @@ def _sites(
         yield end.point, diverse, bound_flips(problem, end.point.z, index, path), "end"
     for k in bends:
         yield side[k], True, [], "jump"
-
-
-def _rewalk(
-    problem: Problem,
-    side: list[WalkPoint],
-    lower: WalkPoint,
-    chi2_hat: float,
-    index: int,
-    direction: int,
-    threshold: float,
-    options: WalkOptions,
-) -> tuple[list[WalkPoint], WalkPoint | None]:
-    """Re-walk inwards from a lower valley while it stays lower, then walk on outwards."""
-    z_hat_i = float(side[0].z[index])
-    reach = abs(lower.z[index] - z_hat_i)
-    inner = [p for p in side[1:] if abs(p.z[index] - z_hat_i) < reach]
-    prev = lower
-    tol = options.checks.lower_tol * threshold
-    for k in range(len(inner) - 1, -1, -1):
-        p = inner[k]
-        if not p.ok:
-            continue
-        [q] = refit_from(problem, index, float(p.z[index]), [prev.z], options.refit) or [p]
-        if q.chi2 < chi2_hat - options.better_tol * max(1.0, threshold):
-            return inner[k:] + [lower], q
-        if q.chi2 >= p.chi2 - tol:
-            break
-        inner[k] = q
-        prev = q
-    good = [side[0]] + [p for p in inner if p.ok] + [lower]
-    step = abs(good[-1].z[index] - good[-2].z[index]) or options.min_step
-    more, better = walk(problem, good, chi2_hat, index, direction, threshold, step, options)
-    return inner + [lower] + more, better
 
 
 @dataclass(frozen=True)
