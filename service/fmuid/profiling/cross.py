@@ -16,15 +16,17 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
 from fmuid.engine.count import counting
 from fmuid.estimation.problem import Problem
+from fmuid.estimation.schema import Written
 from fmuid.profiling.branch import BranchResult
 from fmuid.profiling.checks import refit_from
 from fmuid.profiling.points import WalkPoint
+from fmuid.profiling.schema import CrossCheckOut
 from fmuid.profiling.walk import WalkOptions
 
 log = logging.getLogger(__name__)
@@ -34,17 +36,18 @@ PROBES = 2
 
 
 @dataclass
-class CrossRecord:
-    """What the cross-check did: ends with points beyond them, re-fits, branches settled again."""
+class CrossRecord(Written):
+    """What the cross-check did: ends with points beyond them, re-fits, branches settled again.
+
+    ``to_dict`` writes :class:`~fmuid.profiling.schema.CrossCheckOut` (``checks.cross``).
+    """
+
+    schema = CrossCheckOut
 
     ends: int = 0
     probes: int = 0
     resettled: int = 0
     simulations: int = 0
-
-    def to_dict(self) -> dict[str, int]:
-        """Return the record as the ``checks["cross"]`` entry of a profile result."""
-        return asdict(self)
 
 
 def beyond_end(
