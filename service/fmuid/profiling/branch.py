@@ -192,9 +192,12 @@ def settle_branch(
         lower = None
         for site, diverse, near, why in sites:
             bound = why == "end" and bool(near)
-            keyed = flip_starts(near, site.z, outer, behind, smooth) if bound else []
-            near = [start for _, start in keyed] if bound else near
-            if not valleys and not diverse and not near:
+            starts = (
+                flip_starts(near, site.z, outer, behind, smooth)
+                if bound
+                else [(None, start) for start in near]
+            )
+            if not valleys and not diverse and not starts:
                 continue
             zi = float(site.z[index])
             settled = [] if site.carried else [site]
@@ -203,15 +206,14 @@ def settle_branch(
                 found = refit_from(problem, index, zi, valleys, checks.refit, settled, tol)
                 flipped: dict[tuple[int, float], WalkPoint | None] = {}
                 reached = False
-                for n, start in enumerate(near):
+                for key, start in starts:
                     got = refit_once(
                         memo, problem, index, zi, start, checks.refit, [*settled, *found], tol
                     )
                     found += got
                     back = not got or same_basin(problem, got[0].z, site.z)
                     reached = reached or (bound and not back)
-                    if bound and got:
-                        key = keyed[n][0]
+                    if key is not None and got:
                         if not back:
                             behind[key] = got[0]
                         if outer is None:
@@ -235,7 +237,7 @@ def settle_branch(
             minima += [p for p in found if p is not site]
             counts.check_sims += checked.simulations
             counts.checks += 1
-            counts.starts += len(valleys) + len(others) + len(near)
+            counts.starts += len(valleys) + len(others) + len(starts)
             if not found:
                 continue
             best = min(found, key=lambda p: p.chi2)

@@ -38,24 +38,25 @@ def walk_all(
     z_hat = fit.z_estimate()
     sd = fit.fisher_sd_z()
     seed = problem.spec.seed
+    index = {n: problem.names.index(n) for n in names}
     tasks = [
         BranchTask(
             problem,
             z_hat,
             fit.chi2,
-            problem.names.index(n),
+            index[n],
             d,
             thr["simultaneous"],
             sd[n],
             options,
             pointwise=thr["pointwise"],
-            valleys=tuple(valleys) + extra,
+            valleys=tuple(valleys) + (() if again is None else (again[(index[n], d)],)),
             seed=seed,
             jacobian=fit.jacobian,
         )
         for n in names
         for d in (-1, 1)
-        for extra in _extra(again, problem.names.index(n), d)
+        if again is None or (index[n], d) in again
     ]
     expected = int(np.ceil(np.sqrt((1.0 + options.margin) / options.rise_per_step))) + 1
     done: dict[tuple[int, int], int] = {}
@@ -70,7 +71,7 @@ def walk_all(
             total = sum(per_branch.values())
             parts = []
             for name in names:
-                i = problem.names.index(name)
+                i = index[name]
                 got = done.get((i, -1), 0) + done.get((i, 1), 0)
                 planned = per_branch.get((i, -1), 0) + per_branch.get((i, 1), 0)
                 if planned:
@@ -91,13 +92,3 @@ def walk_all(
 def _found_lower(k: int, branch: BranchResult) -> bool:
     """Whether a branch found a point below the optimum (which restarts the profiles)."""
     return branch.better is not None
-
-
-def _extra(
-    again: dict[tuple[int, int], np.ndarray] | None, index: int, direction: int
-) -> list[tuple[np.ndarray, ...]]:
-    """Return the extra valleys of a branch's task: none, or no task where ``again`` omits it."""
-    if again is None:
-        return [()]
-    point = again.get((index, direction))
-    return [] if point is None else [(point,)]
