@@ -5,7 +5,13 @@ from types import SimpleNamespace
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from fmuid.profiling.checks import CheckOptions, basins, flip_starts, refit_from
+from fmuid.profiling.checks import (
+    CheckOptions,
+    basins,
+    distinct_valleys,
+    flip_starts,
+    refit_from,
+)
 from fmuid.profiling.points import WalkPoint
 
 BOX = SimpleNamespace(z_lower=np.array([0.0, -1.0]), z_upper=np.array([1.0, 1.0]))
@@ -79,3 +85,59 @@ def test_flips_follow_the_valley_behind_the_bound_and_drop_those_that_came_back(
     assert all(start is flip for (_, start), flip in zip(fresh, flips, strict=True))
     later = flip_starts(flips, inner, None, behind, smooth=True)
     assert later[0][1] is reached.z and later[1][1] is flips[1]
+
+
+def _close_valleys(z: np.ndarray) -> np.ndarray:
+    """Two minima along ``z1`` near -0.01 and +0.01, a ridge at 0 (the one near -0.01 lower)."""
+    u = z[1] / 0.01
+    return np.array([3.0 * (u**2 - 1.0), 0.3 * (u + 0.3), z[0]])
+
+
+def _close_minimum(lo: float, hi: float) -> WalkPoint:
+    """One minimum of ``_close_valleys`` (``z0`` = 0) by scipy's bounded scalar minimiser."""
+    found = minimize_scalar(
+        lambda z1: float(np.sum(_close_valleys(np.array([0.0, z1])) ** 2)),
+        bounds=(lo, hi),
+        method="bounded",
+        options={"xatol": 1e-12},
+    )
+    return WalkPoint(np.array([0.0, found.x]), float(found.fun))
+
+
+def _counted_box() -> tuple[list[int], SimpleNamespace]:
+    """A problem-shaped stand-in of ``_close_valleys`` and the list its runs are counted in."""
+    calls: list[int] = []
+
+    def residuals(z: np.ndarray) -> np.ndarray:
+        calls.append(1)
+        return _close_valleys(z)
+
+    bounds = {"z_lower": np.array([-1.0, -2.0]), "z_upper": np.array([1.0, 2.0])}
+    return calls, SimpleNamespace(residuals=residuals, n_free=2, **bounds)
+
+
+def test_a_minimum_a_fit_left_short_of_in_its_own_valley_is_no_second_valley():
+    """The chi2 halfway between two minima tells whether a ridge parts them."""
+    calls, box = _counted_box()
+    lower, upper = _close_minimum(-0.02, 0.0), _close_minimum(0.0, 0.02)
+    assert lower.chi2 < upper.chi2
+    z = lower.z + [0.0, 0.005]  # 0.00125 of z1's range off: beyond BASIN, in the same valley
+    short = WalkPoint(z, float(np.sum(_close_valleys(z) ** 2)))
+    kept = distinct_valleys([upper, short], box, lower, ceiling=1e3, tol=1e-3)
+    assert len(kept) == 1 and kept[0] is upper.z
+    assert len(calls) == 2  # one halfway run per pair that the basin test does not settle
+    calls.clear()
+    assert distinct_valleys([upper], box, lower, ceiling=0.5 * upper.chi2, tol=1e-3) == []
+    assert not calls
+
+
+def test_a_check_refit_near_a_known_minimum_ends_there_only_with_no_ridge_between():
+    calls, box = _counted_box()
+    lower, site = _close_minimum(-0.02, 0.0), _close_minimum(0.0, 0.02)
+    options = CheckOptions().refit
+    [same] = refit_from(box, 0, 0.0, [np.array([0.0, 0.03])], options, [site], 1e-3)
+    assert same is site
+    assert len(calls) == 2  # the start, then the halfway run: no ridge
+    [other] = refit_from(box, 0, 0.0, [np.array([0.0, -0.012])], options, [site], 1e-3)
+    assert other is not site
+    assert abs(other.z[1] - lower.z[1]) < 1e-6 and abs(other.chi2 - lower.chi2) < 1e-9

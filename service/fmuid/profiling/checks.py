@@ -60,6 +60,9 @@ class CheckOptions:
 
 #: Two minima share a basin when no parameter differs by more than this fraction of its range.
 BASIN = 1e-3
+#: A check's re-fit this close to a known minimum (fraction of each range) is tested for a
+#: ridge between them (:func:`refit_from`).
+NEAR = 1e-2
 
 
 def diverse_starts(problem: Problem, n: int, seed: Sequence[int]) -> np.ndarray:
@@ -89,7 +92,10 @@ def refit_from(
     in a known minimum's basin (every parameter within ``BASIN`` of its range) at a chi2 not
     below the minimum's by ``tol`` or more ends there with that minimum as its result: it would
     descend into the minimum (trust region converges within a basin), and a check learns only
-    whether a start reaches a lower valley, not the same one again to full tolerance. Failed
+    whether a start reaches a lower valley, not the same one again to full tolerance. So does a
+    point within ``NEAR`` of a known minimum with no ridge between them (:func:`_one_valley`, one
+    run, made again for the same minimum only at half the distance): a re-fit that creeps
+    towards a bound, or along a flat direction, reaches ``BASIN`` only after many runs. Failed
     re-fits are left out.
     """
     free = np.ones(problem.n_free, bool)
@@ -97,10 +103,18 @@ def refit_from(
         free[index] = False
     seen = [] if known is None else list(known)
     landed: list[WalkPoint] = []
+    span = problem.z_upper - problem.z_lower
+    tested: dict[int, float] = {}
 
     def stop(z: np.ndarray, chi2: float) -> bool:
-        for k in seen:
-            if chi2 >= k.chi2 - tol and same_basin(problem, z, k.z):
+        for n, k in enumerate(seen):
+            if chi2 < k.chi2 - tol:
+                continue
+            gap = float(np.max(np.abs(z - k.z) / span))
+            near = gap <= NEAR and gap <= 0.5 * tested.get(n, np.inf)
+            if near and gap > BASIN:
+                tested[n] = gap
+            if gap <= BASIN or (near and _one_valley(problem, WalkPoint(z, chi2), k, tol)):
                 landed.append(k)
                 return True
         return False
@@ -111,6 +125,7 @@ def refit_from(
         if index is not None and z_fixed is not None:
             z0[index] = z_fixed
         landed.clear()
+        tested.clear()
         try:
             z, chi2, _ = refine(
                 problem, z0, free=free, options=options, stop=None if known is None else stop
@@ -161,14 +176,32 @@ def check_fit(problem: Problem, options: CheckOptions, seed: int) -> list[WalkPo
 
 
 def distinct_valleys(
-    points: Sequence[WalkPoint], problem: Problem, best: WalkPoint, ceiling: float
+    points: Sequence[WalkPoint], problem: Problem, best: WalkPoint, ceiling: float, tol: float
 ) -> list[np.ndarray]:
-    """Minima below ``ceiling`` that differ from ``best`` and from each other (by ``BASIN``)."""
-    kept: list[np.ndarray] = [best.z]
+    """Minima below ``ceiling`` in other valleys than ``best``'s and each other's.
+
+    Two minima lie in one valley when they share a basin (:func:`same_basin`) or when the chi2
+    halfway between them is not above the higher of the two by more than ``tol``: no ridge
+    parts them (a run of the fit that stopped short in a flat direction ends more than
+    ``BASIN`` from the optimum it was descending to, and checking every profile point from it
+    would re-fit the optimum again). One run per pair that ``same_basin`` does not settle.
+    """
+    kept: list[WalkPoint] = [best]
     for p in sorted(points, key=lambda q: q.chi2):
-        if p.chi2 <= ceiling and not any(same_basin(problem, p.z, k) for k in kept):
-            kept.append(p.z)
-    return kept[1:]
+        if p.chi2 <= ceiling and not any(_one_valley(problem, p, k, tol) for k in kept):
+            kept.append(p)
+    return [k.z for k in kept[1:]]
+
+
+def _one_valley(problem: Problem, a: WalkPoint, b: WalkPoint, tol: float) -> bool:
+    """Whether no ridge parts minima ``a`` and ``b`` (see :func:`distinct_valleys`)."""
+    if same_basin(problem, a.z, b.z):
+        return True
+    try:
+        r = problem.residuals(0.5 * (a.z + b.z))
+    except FmuidError:
+        return False
+    return float(r @ r) <= max(a.chi2, b.chi2) + tol
 
 
 def basins(

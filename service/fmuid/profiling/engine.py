@@ -162,7 +162,11 @@ def _profiles(
     cross = CrossRecord()
     for attempt in range(MAX_RESTARTS + 1):
         valleys = distinct_valleys(
-            pool, problem, WalkPoint(fit.z_estimate(), fit.chi2), fit.chi2 + thr["simultaneous"]
+            pool,
+            problem,
+            WalkPoint(fit.z_estimate(), fit.chi2),
+            fit.chi2 + thr["simultaneous"],
+            options.checks.lower_tol * thr["simultaneous"],
         )
         walk = partial(
             walk_all,
