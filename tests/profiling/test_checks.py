@@ -134,10 +134,10 @@ def test_a_minimum_a_fit_left_short_of_in_its_own_valley_is_no_second_valley():
 def test_a_check_refit_near_a_known_minimum_ends_there_only_with_no_ridge_between():
     calls, box = _counted_box()
     lower, site = _close_minimum(-0.02, 0.0), _close_minimum(0.0, 0.02)
-    options = CheckOptions().refit
-    [same] = refit_from(box, 0, 0.0, [np.array([0.0, 0.03])], options, [site], 1e-3)
+    options, near = CheckOptions().refit, CheckOptions().near
+    [same] = refit_from(box, 0, 0.0, [np.array([0.0, 0.03])], options, [site], 1e-3, near)
     assert same is site
     assert len(calls) == 2  # the start, then the halfway run: no ridge
-    [other] = refit_from(box, 0, 0.0, [np.array([0.0, -0.012])], options, [site], 1e-3)
+    [other] = refit_from(box, 0, 0.0, [np.array([0.0, -0.012])], options, [site], 1e-3, near)
     assert other is not site
     assert abs(other.z[1] - lower.z[1]) < 1e-6 and abs(other.chi2 - lower.chi2) < 1e-9

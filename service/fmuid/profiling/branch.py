@@ -203,12 +203,22 @@ def settle_branch(
             settled = [] if site.carried else [site]
             tol = checks.lower_tol * thr
             with counting() as checked:
-                found = refit_from(problem, index, zi, valleys, checks.refit, settled, tol)
+                found = refit_from(
+                    problem, index, zi, valleys, checks.refit, settled, tol, checks.near
+                )
                 flipped: dict[tuple[int, float], WalkPoint | None] = {}
                 reached = False
                 for key, start in starts:
                     got = refit_once(
-                        memo, problem, index, zi, start, checks.refit, [*settled, *found], tol
+                        memo,
+                        problem,
+                        index,
+                        zi,
+                        start,
+                        checks.refit,
+                        [*settled, *found],
+                        tol,
+                        checks.near,
                     )
                     found += got
                     back = not got or same_basin(problem, got[0].z, site.z)
@@ -229,7 +239,7 @@ def settle_branch(
                     )
                     fresh = False
                 from_others = refit_from(
-                    problem, index, zi, others, checks.refit, [*settled, *found], tol
+                    problem, index, zi, others, checks.refit, [*settled, *found], tol, checks.near
                 )
                 if others:
                     known = basins(problem, from_others, [site, *found], checks.end_starts)

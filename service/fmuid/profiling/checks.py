@@ -39,6 +39,11 @@ class CheckOptions:
         Re-walks per branch after which the branch is reported unsettled.
     refit
         Tolerances of the re-fits from diverse starts.
+    near
+        A check's re-fit this close to a known minimum (fraction of each range) is tested for a
+        ridge between them, and minima of the fit check with no ridge between them are one
+        valley (:func:`refit_from`, :func:`distinct_valleys`); 0 on a non-smooth objective,
+        whose jumps of chi2 a halfway run cannot tell from a ridge.
     health_grid
         Grid points on each side of the estimate along each parameter in the health check
         (:func:`fmuid.profiling.health.check_health`): fewer make it shorter for slow FMUs
@@ -56,13 +61,11 @@ class CheckOptions:
         default_factory=lambda: FitOptions(ftol=1e-6, xtol=1e-6, gtol=1e-6, max_nfev=150)
     )
     health_grid: int = GRID_SIDE
+    near: float = 1e-2
 
 
 #: Two minima share a basin when no parameter differs by more than this fraction of its range.
 BASIN = 1e-3
-#: A check's re-fit this close to a known minimum (fraction of each range) is tested for a
-#: ridge between them (:func:`refit_from`).
-NEAR = 1e-2
 
 
 def diverse_starts(problem: Problem, n: int, seed: Sequence[int]) -> np.ndarray:
@@ -83,6 +86,7 @@ def refit_from(
     options: FitOptions,
     known: Sequence[WalkPoint] | None = None,
     tol: float = 0.0,
+    near: float = 0.0,
 ) -> list[WalkPoint]:
     """Re-fit from each start, parameter ``index`` held at ``z_fixed`` (``None``: all free).
 
@@ -93,7 +97,7 @@ def refit_from(
     below the minimum's by ``tol`` or more ends there with that minimum as its result: it would
     descend into the minimum (trust region converges within a basin), and a check learns only
     whether a start reaches a lower valley, not the same one again to full tolerance. So does a
-    point within ``NEAR`` of a known minimum with no ridge between them (:func:`_one_valley`, one
+    point within ``near`` of a known minimum with no ridge between them (:func:`_one_valley`, one
     run, made again for the same minimum only at half the distance): a re-fit that creeps
     towards a bound, or along a flat direction, reaches ``BASIN`` only after many runs. Failed
     re-fits are left out.
@@ -111,10 +115,10 @@ def refit_from(
             if chi2 < k.chi2 - tol:
                 continue
             gap = float(np.max(np.abs(z - k.z) / span))
-            near = gap <= NEAR and gap <= 0.5 * tested.get(n, np.inf)
-            if near and gap > BASIN:
+            close = gap <= near and gap <= 0.5 * tested.get(n, np.inf)
+            if close and gap > BASIN:
                 tested[n] = gap
-            if gap <= BASIN or (near and _one_valley(problem, WalkPoint(z, chi2), k, tol)):
+            if gap <= BASIN or (close and _one_valley(problem, WalkPoint(z, chi2), k, tol)):
                 landed.append(k)
                 return True
         return False
@@ -169,14 +173,24 @@ def bound_flips(
     return out
 
 
-def check_fit(problem: Problem, options: CheckOptions, seed: int) -> list[WalkPoint]:
-    """Re-fit every parameter from ``options.fit_starts`` diverse seeded starts."""
+def check_fit(
+    problem: Problem, options: CheckOptions, seed: int, fit: WalkPoint, tol: float
+) -> list[WalkPoint]:
+    """Re-fit every parameter from ``options.fit_starts`` diverse seeded starts.
+
+    A re-fit that reaches the basin of the ``fit`` (a chi2 not below it by ``tol``) ends there
+    with the ``fit`` as its result (:func:`refit_from`).
+    """
     starts = diverse_starts(problem, options.fit_starts, (seed, 12))
-    return refit_from(problem, None, None, list(starts), options.refit)
+    return refit_from(problem, None, None, list(starts), options.refit, [fit], tol, options.near)
 
 
 def distinct_valleys(
-    points: Sequence[WalkPoint], problem: Problem, best: WalkPoint, ceiling: float, tol: float
+    points: Sequence[WalkPoint],
+    problem: Problem,
+    best: WalkPoint,
+    ceiling: float,
+    tol: float | None,
 ) -> list[np.ndarray]:
     """Minima below ``ceiling`` in other valleys than ``best``'s and each other's.
 
@@ -184,7 +198,8 @@ def distinct_valleys(
     halfway between them is not above the higher of the two by more than ``tol``: no ridge
     parts them (a run of the fit that stopped short in a flat direction ends more than
     ``BASIN`` from the optimum it was descending to, and checking every profile point from it
-    would re-fit the optimum again). One run per pair that ``same_basin`` does not settle.
+    would re-fit the optimum again). One run per pair that ``same_basin`` does not settle;
+    ``tol`` ``None``: ``same_basin`` alone.
     """
     kept: list[WalkPoint] = [best]
     for p in sorted(points, key=lambda q: q.chi2):
@@ -193,10 +208,12 @@ def distinct_valleys(
     return [k.z for k in kept[1:]]
 
 
-def _one_valley(problem: Problem, a: WalkPoint, b: WalkPoint, tol: float) -> bool:
+def _one_valley(problem: Problem, a: WalkPoint, b: WalkPoint, tol: float | None) -> bool:
     """Whether no ridge parts minima ``a`` and ``b`` (see :func:`distinct_valleys`)."""
     if same_basin(problem, a.z, b.z):
         return True
+    if tol is None:
+        return False
     try:
         r = problem.residuals(0.5 * (a.z + b.z))
     except FmuidError:

@@ -147,16 +147,16 @@ def _profiles(
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
     if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
         with counting() as checked:
-            pool = check_fit(problem, options.checks, problem.spec.seed)
+            lower = options.better_tol * max(1.0, thr["simultaneous"])
+            optimum = WalkPoint(fit.z_estimate(), fit.chi2)
+            pool = check_fit(problem, options.checks, problem.spec.seed, optimum, lower)
             fit_check["starts"] = len(pool)
             best = min(pool, key=lambda p: p.chi2, default=None)
-            if best is not None and best.chi2 < fit.chi2 - options.better_tol * max(
-                1.0, thr["simultaneous"]
-            ):
+            if best is not None and best.chi2 < fit.chi2 - lower:
                 log.info("the fit check found chi2 %.6g below the fit's %.6g", best.chi2, fit.chi2)
                 fit_check["lower_found"] = True
                 better_found = True
-                pool.append(WalkPoint(fit.z_estimate(), fit.chi2))
+                pool.append(optimum)
                 fit = refit_optimum(problem, best.z, fit, settle)
         fit_check["simulations"] = checked.simulations
     cross = CrossRecord()
@@ -166,7 +166,7 @@ def _profiles(
             problem,
             WalkPoint(fit.z_estimate(), fit.chi2),
             fit.chi2 + thr["simultaneous"],
-            options.checks.lower_tol * thr["simultaneous"],
+            options.checks.lower_tol * thr["simultaneous"] if options.checks.near else None,
         )
         walk = partial(
             walk_all,
@@ -212,16 +212,18 @@ def _non_smooth(options: WalkOptions, health: Health, threshold: float) -> WalkO
 
     Thorough: polished re-fits, checks at every end and an overshoot of 1. Otherwise a lower
     point within the jumps of chi2 the health check measured is not a better optimum. Both
-    raise the difference step to the health check's.
+    raise the difference step to the health check's and make no ridge tests
+    (:attr:`fmuid.profiling.checks.CheckOptions.near`).
     """
     refit = replace(options.refit, diff_step=health.diff_step)
+    checks = replace(options.checks, near=0.0)
     if options.thorough:
         log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
-        checks = replace(options.checks, always=True)
+        checks = replace(checks, always=True)
         return replace(options, refit=replace(refit, polish=True), checks=checks, overshoot=1.0)
     log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
     noise = max(health.chi2_noise.values(), default=0.0) / max(1.0, threshold)
-    return replace(options, refit=refit, better_tol=max(options.better_tol, noise))
+    return replace(options, refit=refit, checks=checks, better_tol=max(options.better_tol, noise))
 
 
 def _assemble(

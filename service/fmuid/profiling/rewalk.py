@@ -25,6 +25,7 @@ def refit_once(
     options: FitOptions,
     known: Sequence[WalkPoint] | None = None,
     tol: float = 0.0,
+    near: float = 0.0,
 ) -> list[WalkPoint]:
     """:func:`fmuid.profiling.checks.refit_from` from one start, made once per branch.
 
@@ -35,7 +36,7 @@ def refit_once(
     """
     key = (zi, np.asarray(start, dtype=float).tobytes(), options)
     if key not in memo:
-        memo[key] = refit_from(problem, index, zi, [start], options, known, tol)
+        memo[key] = refit_from(problem, index, zi, [start], options, known, tol, near)
     return memo[key]
 
 
