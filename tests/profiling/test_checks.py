@@ -70,21 +70,15 @@ def test_a_check_refit_entering_a_known_basin_ends_there_and_others_run_to_their
         assert abs(fit.chi2 - lower.fun) < 1e-6
 
 
-def test_flips_follow_the_valley_behind_the_bound_and_drop_those_that_came_back():
+def test_flips_follow_the_valley_behind_the_bound():
     inner = np.array([0.5, 0.0, 1.0, 0.3])
     flips = [np.array([0.5, 1.0, 1.0, 0.3]), np.array([0.5, 0.0, -1.0, 0.3])]
     reached = WalkPoint(np.array([0.9, 0.97, 0.2, 0.1]), 7.0)
-    behind = {(1, 1.0): reached}
-    outer = {(1, 1.0): reached, (2, -1.0): None}
-    [(key, start)] = flip_starts(flips, inner, outer, behind, smooth=True)
-    assert key == (1, 1.0) and start is reached.z
-    kept = flip_starts(flips, inner, outer, behind, smooth=False)
+    kept = flip_starts(flips, inner, {(1, 1.0): reached})
     assert [key for key, _ in kept] == [(1, 1.0), (2, -1.0)]
     assert kept[0][1] is reached.z and kept[1][1] is flips[1]
-    fresh = flip_starts(flips, inner, None, {}, smooth=True)
+    fresh = flip_starts(flips, inner, {})
     assert all(start is flip for (_, start), flip in zip(fresh, flips, strict=True))
-    later = flip_starts(flips, inner, None, behind, smooth=True)
-    assert later[0][1] is reached.z and later[1][1] is flips[1]
 
 
 def _close_valleys(z: np.ndarray) -> np.ndarray:

@@ -72,6 +72,22 @@ def test_tractor_snr25_second_valley_ends(tractor_fmu):
 
 
 @pytest.mark.slow
+def test_tractor_valley_lower_between_the_ends_only(tractor_fmu):
+    """Ramp 10 Hz, SNR 16.67, seed 1: C_air's pointwise lower end lies in a valley behind a
+    bound that is lower there but not at the simultaneous end.
+
+    The flips at the simultaneous end come back into the walked valley; the pointwise end's
+    own flips find the lower valley (the end was 8.4 % of its half-width short when they were
+    left out after the outer end's came back).
+    """
+    data, sigma = ramp_dataset(tractor_fmu, snr=16.67, seed=1, rate=10.0)
+    s = tire_spec(sigma)
+    result = fmuid.profile(tractor_fmu, [data], s, workers=2)
+    problem = make_problem(tractor_fmu, [data], s)
+    assert_ends_exact(problem, result, ["C_air"], kinds=("pointwise",), tol=0.01)
+
+
+@pytest.mark.slow
 def test_fit_without_global_search_is_checked(tractor_fmu):
     """The optimum is the lowest of independent scipy fits from diverse starts."""
     data, sigma = ramp_dataset(tractor_fmu, snr=16.67, seed=2, rate=10.0)

@@ -1,4 +1,5 @@
-"""The health check says how many runs it makes and how long they take, and can be shortened."""
+"""The health check says how many runs it makes and how long they take, and can be shortened;
+what it calls smooth."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from tests.model.quirks import build_quirk_fmu
 
 import fmuid
 from fmuid.data import experiment_from_arrays, spec_from_json
-from fmuid.profiling.health import check_health
+from fmuid.profiling.health import PROBE_STEP, SMOOTH_STEP, Health, check_health
 from fmuid.progress import Progress
 from fmuid.stages import make_problem
 
@@ -45,3 +46,14 @@ def test_progress_and_estimate_of_a_shortened_check(
     assert events[-1].detail.endswith(" 0 s left")
     assert any(f"health check: {total} runs of the 1 experiment(s)" in m for m in caplog.messages)
     assert health.smooth and set(health.jumps) == {"tau", "K"}
+
+
+def test_noise_at_round_off_raises_the_step_but_leaves_the_objective_smooth():
+    """An error-controlled solver's noise far under any threshold needs a longer difference
+    step, not the thorough profile; noise that needs a step over ``SMOOTH_STEP`` or a jump
+    does."""
+    assert Health(deterministic=True, reset_matches_fresh=True, diff_step=30 * PROBE_STEP).smooth
+    noisy = Health(deterministic=True, reset_matches_fresh=True, diff_step=2 * SMOOTH_STEP)
+    assert not noisy.smooth
+    assert not Health(deterministic=True, reset_matches_fresh=None, jumps={"k": 1}).smooth
+    assert not Health(deterministic=False, reset_matches_fresh=None).smooth

@@ -84,9 +84,8 @@ def settle_branch(
     (:func:`fmuid.profiling.checks.bound_flips`): the valley on the other side of that bound
     is found by the profile's shape, not by the diverse starts' luck. A flip starts from the
     minimum an earlier flip of the same parameter to the same bound reached at another end of
-    the branch (in any round) where that left the walked valley, and at the inner (pointwise)
-    end it is left out when the outer end's came back into the walked valley and the walk has
-    no jump or switch (:func:`fmuid.profiling.checks.flip_starts`). A check's re-fit that
+    the branch (in any round) where that left the walked valley
+    (:func:`fmuid.profiling.checks.flip_starts`). A check's re-fit that
     enters the basin of a minimum it already knows (the checked point, the check's earlier
     re-fits) ends there (:func:`fmuid.profiling.checks.refit_from`). A lower chi2 there means
     the walk followed a higher valley: the stretch towards the estimate is re-walked from the
@@ -177,7 +176,6 @@ def settle_branch(
         kinks = switches(side, index, problem.z_lower, problem.z_upper, tangent)
         bends = jumps(side, index, chi2_hat, thr)
         counts.jumps = max(counts.jumps, len(kinks) + len(bends))
-        smooth = not kinks and not bends
         sites = _sites(
             problem,
             index,
@@ -188,14 +186,11 @@ def settle_branch(
             sd_z,
             thorough or checks.always,
         )
-        outer: dict[tuple[int, float], WalkPoint | None] | None = None
         lower = None
         for site, diverse, near, why in sites:
             bound = why == "end" and bool(near)
             starts = (
-                flip_starts(near, site.z, outer, behind, smooth)
-                if bound
-                else [(None, start) for start in near]
+                flip_starts(near, site.z, behind) if bound else [(None, start) for start in near]
             )
             if not valleys and not diverse and not starts:
                 continue
@@ -206,7 +201,6 @@ def settle_branch(
                 found = refit_from(
                     problem, index, zi, valleys, checks.refit, settled, tol, checks.near
                 )
-                flipped: dict[tuple[int, float], WalkPoint | None] = {}
                 reached = False
                 for key, start in starts:
                     got = refit_once(
@@ -223,13 +217,8 @@ def settle_branch(
                     found += got
                     back = not got or same_basin(problem, got[0].z, site.z)
                     reached = reached or (bound and not back)
-                    if key is not None and got:
-                        if not back:
-                            behind[key] = got[0]
-                        if outer is None:
-                            flipped[key] = None if back else got[0]
-                if bound and outer is None:
-                    outer = flipped
+                    if key is not None and got and not back:
+                        behind[key] = got[0]
                 others: list[np.ndarray] = []
                 if diverse or reached:
                     others = (
@@ -320,8 +309,7 @@ def _sites(
     before it that finds a lower valley re-walks the branch, and the ends are located on the
     re-walked one. An end where other parameters sit on a bound (there or at a point of the
     walk) is also re-fitted once per such parameter with it moved to its other bound
-    (:func:`fmuid.profiling.checks.bound_flips`; the outer end's first:
-    :func:`fmuid.profiling.checks.flip_starts`).
+    (:func:`fmuid.profiling.checks.bound_flips`, :func:`fmuid.profiling.checks.flip_starts`).
     """
     kinks, bends = marks
     for k in kinks:

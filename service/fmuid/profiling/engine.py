@@ -143,6 +143,9 @@ def _profiles(
         options = _non_smooth(options, health, thr["simultaneous"])
         settle = replace(options.refit, polish=True)
         fit = descend(problem, fit, settle)
+    elif health.diff_step > options.refit.diff_step:
+        options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))
+        settle = options.refit
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
     if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:

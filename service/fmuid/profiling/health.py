@@ -33,6 +33,11 @@ GRID_SPAN = 2e-3
 SIGNAL_TO_NOISE = 1e3
 #: Largest finite-difference step (relative, fitted coordinates).
 MAX_DIFF_STEP = 1e-2
+#: Largest finite-difference step of a smooth objective: up to it the raised step's truncation
+#: error (about the step, relative) stays below the 1e-3 its noise leaves (``SIGNAL_TO_NOISE``),
+#: so trust region and Gauss-Newton converge as at the default step (noise at round-off of an
+#: error-controlled solver: chi2 jitters by far less than any threshold).
+SMOOTH_STEP = 1e-4
 #: Jumps of chi2 (here or along a walked profile) of this fraction of the pointwise threshold
 #: limit the intervals: the label says by how much the jumps could move the ends.
 NOISY_FRACTION = 0.1
@@ -84,12 +89,15 @@ class Health(Written):
 
     @property
     def smooth(self) -> bool:
-        """Whether the objective is deterministic and smooth enough for the default steps.
+        """Whether the objective is deterministic and smooth enough for the default profile.
+
+        No jumps of chi2, and a finite-difference step at most ``SMOOTH_STEP`` (a larger one
+        than the default still raises the re-fits' step).
 
         An unreliable reset does not count: from its detection on every run gets a fresh
         instance, so the objective is as smooth as the FMU.
         """
-        return self.deterministic and not any(self.jumps.values()) and self.diff_step <= PROBE_STEP
+        return self.deterministic and not any(self.jumps.values()) and self.diff_step <= SMOOTH_STEP
 
     @property
     def noise_floor_chi2(self) -> float:
