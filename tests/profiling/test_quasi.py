@@ -8,7 +8,7 @@ from scipy.optimize import least_squares
 from fmuid.profiling.checks import switches
 from fmuid.profiling.points import WalkPoint
 from fmuid.profiling.quasi import Secant, quasi_refit
-from fmuid.profiling.walk import path_tangent, walk_start
+from fmuid.profiling.walk import path_tangent
 
 
 def _problem(residuals, n):
@@ -85,29 +85,3 @@ def test_a_smooth_path_has_no_switch_and_a_jump_of_the_others_is_one():
     for k in range(4, 7):
         jumped[k][1] += 0.4
     assert switches(_path(jumped), 0, lower, upper) == [4]
-
-
-def test_a_walk_starts_from_the_lowest_of_its_extrapolations():
-    """A valley ``z1 = z0^2`` that turns down past ``z0 = 0.2``: the curved and straight
-    extrapolations of the path overshoot up the wall, the last point moved stays near the
-    valley (closed-form chi2 of each)."""
-    runs = []
-
-    def valley(z0):
-        return z0**2 if z0 <= 0.2 else 0.04 - (z0 - 0.2)
-
-    def residuals(z):
-        runs.append(z.copy())
-        return np.array([10.0 * (z[1] - valley(z[0]))])
-
-    problem = _problem(residuals, 2)
-    path = [WalkPoint(np.array([x, x**2]), 0.0) for x in (0.0, 0.1, 0.2)]
-    start = walk_start(problem, path, 0, 0.3, None, None)
-    # the valley at -0.06; curved guess z1 = 0.09, straight 0.07, the last point moved 0.04:
-    # chi2 2.25, 1.69, 1
-    assert np.allclose(start, [0.3, 0.04])
-    assert len(runs) == 3
-    secant = Secant(np.zeros((1, 2)), path[-1].z.copy())
-    runs.clear()
-    chosen = walk_start(problem, path, 0, 0.3, None, secant)
-    assert np.array_equal(secant.z, chosen) and np.allclose(secant.r, [1.0])

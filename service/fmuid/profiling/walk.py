@@ -188,7 +188,8 @@ def walk(
         zi = float(np.clip(zi, lo, hi))
         if abs(zi - last_ok.z[index]) < 1e-12 * max(1.0, span):
             break
-        guess = walk_start(problem, path, index, zi, tangent, secant)
+        guess = _extrapolate(path, index, zi, tangent)
+        guess = np.clip(guess, problem.z_lower, problem.z_upper)
         cheap = None
         if secant is not None:
             cheap = quasi_refit(
@@ -286,49 +287,6 @@ def path_tangent(jacobian: np.ndarray, index: int) -> np.ndarray | None:
     if not np.isfinite(cii) or cii <= 0.0:
         return None
     return cov[:, index] / cii
-
-
-def walk_start(
-    problem: Problem,
-    path: list[WalkPoint],
-    index: int,
-    zi: float,
-    tangent: np.ndarray | None,
-    secant: Secant | None,
-) -> np.ndarray:
-    """Return the start of the re-fit at ``zi``: the lowest of the path's extrapolations.
-
-    The curved extrapolation (:func:`_extrapolate`), the straight line through the last two
-    points and the last point moved to ``zi`` are each run once (kept within the bounds): in a
-    curved valley, or where a parameter reaches its bound, the curved guess can land far up a
-    wall, and the re-fit from there costs many trust-region iterations. The lowest run corrects
-    the carried ``secant`` (its Gauss-Newton re-fit reuses the residuals; the others, up the
-    walls, would bend the carried Jacobian away from the valley). Where every run fails, the
-    curved guess (its re-fit then reports the failure).
-    """
-    lo, hi = problem.z_lower, problem.z_upper
-    guesses = [np.clip(_extrapolate(path, index, zi, tangent), lo, hi)]
-    last = path[-1].z.copy()
-    if len(path) >= 2 and path[-1].z[index] != path[-2].z[index]:
-        slope = (last - path[-2].z) / (last[index] - path[-2].z[index])
-        guesses.append(np.clip(last + slope * (zi - last[index]), lo, hi))
-    last[index] = zi
-    guesses.append(np.clip(last, lo, hi))
-    runs: list[tuple[float, np.ndarray, np.ndarray]] = []
-    for z in guesses:
-        if any(np.array_equal(z, seen) for _, seen, _ in runs):
-            continue
-        try:
-            r = problem.residuals(z)
-        except FmuidError:
-            continue
-        runs.append((float(r @ r), z, r))
-    if not runs:
-        return guesses[0]
-    _, z, r = min(runs, key=lambda run: run[0])
-    if secant is not None:
-        secant.update(z, r)
-    return z
 
 
 def _extrapolate(
