@@ -138,14 +138,13 @@ def _profiles(
     health = check_health(
         problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
     )
+    if health.diff_step > options.refit.diff_step:
+        options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))
     settle = options.refit
     if not health.smooth:
         options = _non_smooth(options, health, thr["simultaneous"])
         settle = replace(options.refit, polish=True)
         fit = descend(problem, fit, settle)
-    elif health.diff_step > options.refit.diff_step:
-        options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))
-        settle = options.refit
     pool: list[WalkPoint] = []
     fit_check: dict[str, Any] = {"starts": 0, "lower_found": False, "simulations": 0}
     if only is None and (not fit.global_search or not health.smooth) and options.checks.fit_starts:
@@ -214,19 +213,19 @@ def _non_smooth(options: WalkOptions, health: Health, threshold: float) -> WalkO
     """Return the walk settings for a non-smooth objective (see :class:`WalkOptions`).
 
     Thorough: polished re-fits, checks at every end and an overshoot of 1. Otherwise a lower
-    point within the jumps of chi2 the health check measured is not a better optimum. Both
-    raise the difference step to the health check's and make no ridge tests
-    (:attr:`fmuid.profiling.checks.CheckOptions.near`).
+    point within the jumps of chi2 the health check measured is not a better optimum. Both make
+    no ridge tests (:attr:`fmuid.profiling.checks.CheckOptions.near`); the caller has raised the
+    difference step to the health check's, as for any objective.
     """
-    refit = replace(options.refit, diff_step=health.diff_step)
     checks = replace(options.checks, near=0.0)
     if options.thorough:
         log.info("the objective is not smooth (%s): thorough checks", health.to_dict())
         checks = replace(checks, always=True)
-        return replace(options, refit=replace(refit, polish=True), checks=checks, overshoot=1.0)
+        refit = replace(options.refit, polish=True)
+        return replace(options, refit=refit, checks=checks, overshoot=1.0)
     log.info("the objective is not smooth (%s): larger difference steps", health.to_dict())
     noise = max(health.chi2_noise.values(), default=0.0) / max(1.0, threshold)
-    return replace(options, refit=refit, checks=checks, better_tol=max(options.better_tol, noise))
+    return replace(options, checks=checks, better_tol=max(options.better_tol, noise))
 
 
 def _assemble(
