@@ -8,8 +8,9 @@ The cases (``--cases``, noise seed 1) are the tractor's well-posed rate-limited 
 5 Hz, SNR 1000), its chirp (5 Hz, SNR 100) and its low-SNR step (ramp 5 Hz, SNR 25, where
 C_atf's upper simultaneous end lies in a second, lower valley). fmuid runs twice: a full study
 (all six parameters, with the check of the fit) and the bench's parameters alone from the
-checked fit; pyPESTO profiles the bench's parameters from the same fit, and the ratios of the
-last table are fmuid's second run over tuned pyPESTO's. Every pointwise and simultaneous CI end
+checked fit (``--parameters``: C_atf and C_atr, or ``all`` six); pyPESTO profiles the
+bench's parameters from the same fit, and the ratios of the last table are fmuid's second run
+over tuned pyPESTO's. Every pointwise and simultaneous CI end
 is compared with an exact reference crossing computed here by root-finding on multi-start scipy
 re-fits (``tests/profiling/reference.py``). pyPESTO runs tuned (trust-region least squares on the
 residuals, the simultaneous threshold as its stop ratio, shorter steps) and, with
@@ -168,29 +169,27 @@ def run_case(bench, reference, fmu: Path, label: str, args: argparse.Namespace) 
     problem = make_problem(fmu, [data], spec)
     fit = fit_problem(problem, global_search=False)
     thr = thresholds(spec.confidence, problem.n_free)
-    index = [problem.names.index(n) for n in args.parameters]
+    names = chosen(args.parameters, problem.names)
+    index = [problem.names.index(n) for n in names]
     rows = {}
     t0 = time.perf_counter()
     prof = profile_problem(problem, fit, workers=args.workers)
     sims = prof.cost.simulations - fit.cost.simulations
     rows["fmuid, all 6 (fit check too)"] = (time.perf_counter() - t0, sims, prof)
     t0 = time.perf_counter()
-    only = profile_problem(problem, prof.fit, only=args.parameters, workers=args.workers)
+    only = profile_problem(problem, prof.fit, only=names, workers=args.workers)
     sims = only.cost.simulations - prof.fit.cost.simulations
     ours = f"fmuid, {len(index)} from the checked fit"
     rows[ours] = (time.perf_counter() - t0, sims, only)
     z_hat, chi2_hat = prof.fit.z_estimate(), prof.fit.chi2
-    table = {
-        label: (wall, sims, fmuid_ends(p, args.parameters))
-        for label, (wall, sims, p) in rows.items()
-    }
+    table = {label: (wall, sims, fmuid_ends(p, names)) for label, (wall, sims, p) in rows.items()}
     for tuned in (False, True) if args.defaults else (True,):
         t0 = time.perf_counter()
         sims, ends = run_pypesto(problem, z_hat, index, tuned, thr)
         name = "pyPESTO 0.7.0 " + ("tuned" if tuned else "defaults")
         table[name] = (time.perf_counter() - t0, sims, ends)
     exact: dict[str, dict[str, tuple[float | None, ...]]] = {}
-    for name, i in zip(args.parameters, index, strict=True):
+    for name, i in zip(names, index, strict=True):
         ref = reference.ReferenceProfile(problem, i, z_hat)
         exact[name] = {
             kind: tuple(
@@ -204,17 +203,14 @@ def run_case(bench, reference, fmu: Path, label: str, args: argparse.Namespace) 
         "error in % of the half-width against the bench's reference crossings"
     )
     heads = [
-        f"{n} {k[:3].replace('poi', 'pw')} {s}"
-        for n in args.parameters
-        for k in thr
-        for s in ("lo", "hi")
+        f"{n} {k[:3].replace('poi', 'pw')} {s}" for n in names for k in thr for s in ("lo", "hi")
     ]
     print(f"{'tool':32s} {'wall s':>7} {'sims':>7}  " + " ".join(f"{h:>13s}" for h in heads))
     worst = {}
     for name, (wall, sims, ends) in table.items():
         errors = [
             _error(ends[n][kind][k], exact[n][kind][k], float(z_hat[i]))
-            for n, i in zip(args.parameters, index, strict=True)
+            for n, i in zip(names, index, strict=True)
             for kind in thr
             for k in range(2)
         ]
@@ -224,6 +220,7 @@ def run_case(bench, reference, fmu: Path, label: str, args: argparse.Namespace) 
     peer = "pyPESTO 0.7.0 tuned"
     return {
         "case": label,
+        "parameters": len(names),
         "ours": table[ours][:2],
         "peer": table[peer][:2],
         "worst": (worst[ours], worst[peer]),
@@ -233,7 +230,12 @@ def run_case(bench, reference, fmu: Path, label: str, args: argparse.Namespace) 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--cases", nargs="*", choices=list(CASES), default=list(CASES))
-    parser.add_argument("--parameters", nargs="*", default=["C_atf", "C_atr"])
+    parser.add_argument(
+        "--parameters",
+        nargs="*",
+        default=["C_atf", "C_atr"],
+        help="the parameters both tools profile (names of the tractor's, or all)",
+    )
     parser.add_argument("--workers", type=int, default=1, help="fmuid's worker processes")
     parser.add_argument("--seed", type=int, default=1, help="noise seed")
     parser.add_argument("--defaults", action="store_true", help="also pyPESTO's defaults")
@@ -242,8 +244,9 @@ def main() -> None:
     reference = _load("reference", HERE.parent / "tests" / "profiling" / "reference.py")
     fmu = builtin_fmu("tractor_implement")
     summary = [run_case(bench, reference, fmu, label, args) for label in args.cases]
+    count = summary[0]["parameters"]
     print(
-        f"\nfmuid ({len(args.parameters)} parameters from the checked fit) / pyPESTO 0.7.0 tuned; "
+        f"\nfmuid ({count} parameters from the checked fit) / pyPESTO 0.7.0 tuned; "
         "worst end: error as a fraction of the half-width (target: ratios 0.25 / 0.3, ends 0.05)"
     )
     print(
@@ -256,6 +259,19 @@ def main() -> None:
             f"{row['case']:22s} {s0:10d} {w0:7.1f} {s1:10d} {w1:7.1f} {s0 / s1:10.2f}"
             f" {w0 / w1:10.2f} {row['worst'][0]:11.4f} {row['worst'][1]:10.4f}"
         )
+
+
+def chosen(parameters: list[str], names: tuple[str, ...]) -> list[str]:
+    """The ``--parameters`` asked for: ``all`` for every free parameter; unknown names fail."""
+    if parameters == ["all"]:
+        return list(names)
+    unknown = [p for p in parameters if p not in names]
+    if unknown or not parameters:
+        raise SystemExit(
+            f"--parameters: {', '.join(unknown) or 'none given'}; the tractor's are "
+            f"{', '.join(names)} (or all)"
+        )
+    return parameters
 
 
 def _error(ours: float | None, exact: float | None, z_hat: float) -> tuple[float, str]:
