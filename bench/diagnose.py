@@ -8,7 +8,7 @@ p in [1e-12, 1e-3]. Controls are drawn the same way without an effect. Only the 
 ``diagnose`` is read.
 
     python bench/diagnose.py [--seeds 8] [--controls 30] [--effects output_lag,...]
-        [--cache DIR] [--jobs N] [--shard K/N] [--log F] [--generate-only]
+        [--cache DIR] [--jobs N] [--workers W] [--shard K/N] [--log F] [--generate-only]
         [--easy [--easy-seeds 2]] [--no-absorbed] [--skip-done LOG]
     python bench/diagnose.py --false-alarm 200 [--cache DIR] [--jobs N] [--shard K/N] [--log F]
     python bench/diagnose.py --table F [F ...]      # the tables of logged runs (merged shards)
@@ -17,14 +17,17 @@ Prints one JSON line per case as it finishes, then the confusion table of the co
 (and apart from it, with ``--easy``, of today's fixed "easy" magnitudes), per effect how often
 it was flagged, named right, named right or tied with the truth listed, and how often the added
 parameter's 95 % interval contains the true magnitude (over all cases of the effect), and the
-median seconds per diagnosis. ``--false-alarm N`` diagnoses N controls and prints the
-false-alarm rate with its Clopper-Pearson 95 % interval.
+median seconds per diagnosis (each with ``--workers`` processes for its profiles, by default
+the machine's cores shared among the ``--jobs``, as ``fmuid diagnose`` uses them).
+``--false-alarm N`` diagnoses N controls and prints the false-alarm rate with its
+Clopper-Pearson 95 % interval.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from collections.abc import Iterator
@@ -129,7 +132,7 @@ def make_case(task: Task, cache: Path | None) -> tuple[ft.Case, dict[str, Any]]:
 
 
 def run_task(
-    task: Task, cache: Path | None, generate_only: bool, absorbed: bool = True
+    task: Task, cache: Path | None, generate_only: bool, options: DiagnoseOptions
 ) -> dict[str, Any]:
     """Generate one case and (unless ``generate_only``) diagnose it; failures become a row."""
     kind, effect, seed, level = task
@@ -147,7 +150,6 @@ def run_task(
     t0 = time.perf_counter()
     try:
         fmu = builtin_fmu("tractor_implement")
-        options = DiagnoseOptions(absorbed=absorbed)
         result = diagnose(fmu, case.experiments, study_spec(), options=options).to_dict()
     except Exception as exc:  # an engine failure is a result of the bench, not its end
         return {**row, "error": f"diagnose: {type(exc).__name__}: {exc}"}
@@ -158,14 +160,15 @@ def run_task(
 
 def run(selected: list[Task], args: argparse.Namespace) -> Iterator[dict[str, Any]]:
     """Run the tasks, in this process or in ``args.jobs`` worker processes."""
+    workers = args.workers or max(1, (os.cpu_count() or 1) // max(1, args.jobs))
+    options = DiagnoseOptions(absorbed=not args.no_absorbed, workers=workers)
     if args.jobs <= 1:
         for task in selected:
-            yield run_task(task, args.cache, args.generate_only, not args.no_absorbed)
+            yield run_task(task, args.cache, args.generate_only, options)
         return
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         futures = [
-            pool.submit(run_task, t, args.cache, args.generate_only, not args.no_absorbed)
-            for t in selected
+            pool.submit(run_task, t, args.cache, args.generate_only, options) for t in selected
         ]
         for future in as_completed(futures):
             yield future.result()
@@ -184,7 +187,10 @@ def main() -> None:
     parser.add_argument("--easy-seeds", type=int, default=2, help="easy cases per magnitude")
     parser.add_argument("--false-alarm", type=int, default=0, metavar="N", help="N controls only")
     parser.add_argument("--cache", type=Path, default=None, help="folder of generated cases")
-    parser.add_argument("--jobs", type=int, default=1, help="worker processes")
+    parser.add_argument("--jobs", type=int, default=1, help="cases diagnosed side by side")
+    parser.add_argument(
+        "--workers", type=int, default=None, help="profile processes per diagnosis (cores / jobs)"
+    )
     parser.add_argument("--shard", default="0/1", help="K/N: run every N-th case from the K-th")
     parser.add_argument("--generate-only", action="store_true", help="fill the cache only")
     parser.add_argument("--log", type=Path, default=None, help="append JSON lines here")
