@@ -81,8 +81,9 @@ def test_a_dask_cluster_gives_the_local_diagnosis(msd_fmu: Path) -> None:
     from distributed import Client, LocalCluster
 
     data = [offset_record()]
-    opts = DiagnoseOptions(absorbed=False, discriminate=False)
+    opts = DiagnoseOptions(discriminate=False)
     local = diagnose(msd_fmu, data, SPEC, options=opts).to_dict()
+    assert local["absorbed"]
     with LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster:

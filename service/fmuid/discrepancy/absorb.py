@@ -70,6 +70,7 @@ def absorbed(
     augmented_fit: FitResult,
     workers: int,
     walk: WalkOptions,
+    executor: Any = None,
 ) -> dict[str, Any]:
     """Profile the original parameters before and after; return the comparison.
 
@@ -77,7 +78,8 @@ def absorbed(
     record, it would double the profiles for every record added and says nothing of the physics.
 
     ``augmented`` must be set at the study's confidence (its added parameters are free but not
-    profiled).
+    profiled). ``executor``: a ``dask.distributed.Client`` to run the branches on (as the
+    diagnosis's other profiles), else ``workers`` local processes.
 
     The two fits are profiled as the diagnosis made them: no re-fits of the base fit from
     diverse starts (``CheckOptions.fit_starts``), which the profile of a whole-model fit
@@ -89,6 +91,10 @@ def absorbed(
     names = base.shared_names
     only = names if len(names) < base.n_free else None
     given = replace(walk, checks=replace(walk.checks, fit_starts=0))
-    before = profile_problem(base, base_fit, only=only, workers=workers, options=given)
-    after = profile_problem(augmented, augmented_fit, only=names, workers=workers, options=given)
+    before = profile_problem(
+        base, base_fit, only=only, workers=workers, executor=executor, options=given
+    )
+    after = profile_problem(
+        augmented, augmented_fit, only=names, workers=workers, executor=executor, options=given
+    )
     return compare(before, after, names)

@@ -321,7 +321,9 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     absorbed_by: dict[str, object] = {}
     if opts.absorbed:
         at_study = augmented(problem, applied, step_scale(aug))
-        absorbed_by = absorbed(problem, fit, at_study, final_fit, opts.workers, opts.walk)
+        absorbed_by = absorbed(
+            problem, fit, at_study, final_fit, opts.workers, opts.walk, run.executor
+        )
         run.report("profiles of the original parameters before and after")
         run.lap("absorbed")
     common["location"] = {
