@@ -14,6 +14,7 @@ from fmuid.profiling.engine import profile_problem
 from fmuid.stages import make_problem
 
 
+@pytest.mark.slow
 def test_the_absorbed_profiles_make_no_fit_check(
     msd_fmu: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
