@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from fmuid.errors import FmuError
+from fmuid.model import simulator
+from fmuid.model.kept import array_bytes
 from fmuid.model.registry import get_simulator
 from fmuid.model.simulator import Simulator
 
@@ -124,3 +126,18 @@ def test_plan_reuse_sees_arrays_changed_in_place(tractor: Simulator) -> None:
     np.testing.assert_allclose(doubled[:, 0], 2.0 * first[:, 0], rtol=1e-9, atol=1e-15)
     fresh = tractor.simulate({}, RAMP_TIME, {"delta": 2.0 * RAMP_DELTA}, OUTPUT_TIME, OUTS)
     np.testing.assert_array_equal(doubled, fresh)
+
+
+def test_run_plans_stay_within_their_byte_bound(
+    tractor: Simulator, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """New input arrays at every run (an input effect) keep at most the plans the bound holds."""
+    tractor._plans.clear()
+    _ramp(tractor, {})
+    (one,) = tractor._plans.values()
+    assert one[3] == array_bytes(one[:3])
+    monkeypatch.setattr(simulator, "MAX_BYTES", int(2.5 * one[3]))
+    for k in range(5):
+        tractor.simulate({}, RAMP_TIME, {"delta": RAMP_DELTA + k}, OUTPUT_TIME, OUTS)
+    assert len(tractor._plans) == 2
+    assert all(e[3] == array_bytes(e[:3]) for e in tractor._plans.values())

@@ -4,9 +4,11 @@ Input effects act in their class order (offset, gain, dead zone, saturation, lag
 fine grid that holds every input sample and data row, with no interval longer than the data's
 median interval over :data:`FINE`; the FMU gets the result as a piecewise-linear input. A lag
 filters exactly (the input is linear between grid points); a dead zone or a saturation clips
-at the grid points. Output lags filter the FMU's outputs read on that fine grid (extra
-communication points, no spline). Feedback effects close the loop around the FMU at the same
-step (:mod:`fmuid.model.feedback`). Output gains, biases and saturations act on the data rows.
+at the grid points. An offset or a gain alone acts on the input's own samples (the same
+piecewise-linear input, with no extra points for the FMU to step to). Output lags filter the
+FMU's outputs read on that fine grid (extra communication points, no spline). Feedback effects
+close the loop around the FMU at the same step (:mod:`fmuid.model.feedback`). Output gains,
+biases and saturations act on the data rows.
 """
 
 from __future__ import annotations
@@ -123,7 +125,7 @@ class AugmentedPredictor:
                 times[e.target] = np.concatenate([[t[0]], t + delay])
                 values[e.target] = np.concatenate([[u[0]], u])
                 continue
-            if t is not grid:
+            if t is not grid and not e.affine:
                 t, u = grid, np.interp(grid, t, u)
             times[e.target], values[e.target] = t, e.on_input(t, u, params)
         if all(t is grid for t in times.values()):

@@ -42,6 +42,9 @@ class Effect:
         The added parameters (names as in the contract's table).
     words
         Units and roles for the sentence.
+    affine
+        (class) An input map ``a + b u`` of each sample: it commutes with the linear
+        interpolation between samples, so it acts on the input's own samples (no fine grid).
 
     """
 
@@ -49,6 +52,7 @@ class Effect:
     side: ClassVar[str] = ""
     order: ClassVar[int] = 0
     threshold: ClassVar[bool] = False
+    affine: ClassVar[bool] = False
     target: str
     parameters: tuple[AddedParameter, ...]
     words: Words = field(default=Words(), compare=False, repr=False)
@@ -93,7 +97,7 @@ class InputOffset(Effect):
     """The FMU sees the measured input plus a constant offset."""
 
     kind = "input_offset"
-    side, order = "input", 0
+    side, order, affine = "input", 0, True
 
     def on_input(self, time: np.ndarray, u: np.ndarray, p: Mapping[str, float]) -> np.ndarray:
         """Add the offset."""
@@ -113,7 +117,7 @@ class InputGain(Effect):
     """The FMU sees the measured input times a gain (a calibration error)."""
 
     kind = "input_gain"
-    side, order = "input", 1
+    side, order, affine = "input", 1, True
 
     def on_input(self, time: np.ndarray, u: np.ndarray, p: Mapping[str, float]) -> np.ndarray:
         """Scale the input."""

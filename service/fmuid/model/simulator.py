@@ -88,7 +88,7 @@ class Simulator(SimulatorBase):
         self.reset_reliable = reset_reliable
         self.native = True
         self._channels: dict[tuple[str, ...], Channels] = {}
-        self._plans: dict[tuple[object, ...], tuple[tuple[Any, ...], tuple[Any, ...], Any]] = {}
+        self._plans: dict[tuple[object, ...], tuple[Any, ...]] = {}
 
     @property
     def instances(self) -> str:
@@ -290,11 +290,11 @@ class Simulator(SimulatorBase):
             grid = fine_times(grid, feedback.step)
         plan = make_plan(input_time, input_values, inputs.variables, grid, sample_time)
         copies = tuple(np.array(a, dtype=float, copy=True) for a in arrays)
-        entry = (arrays, copies, (plan, grid))
-        size = array_bytes(entry)
+        size = array_bytes((arrays, copies, plan, grid))
+        entry = (arrays, copies, (plan, grid), size)
         while self._plans and (
             len(self._plans) >= PLAN_CACHE
-            or size + sum(array_bytes(e) for e in self._plans.values()) > MAX_BYTES
+            or size + sum(e[3] for e in self._plans.values()) > MAX_BYTES
         ):
             self._plans.pop(next(iter(self._plans)))
         self._plans[key] = entry
