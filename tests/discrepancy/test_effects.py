@@ -98,3 +98,32 @@ def test_output_lag_bias_gain_and_saturation_act_on_the_recording(msd_fmu: Path)
     expected = np.minimum(0.9 * lagged + 0.01, 0.2)
     assert np.max(np.abs(got - expected)) < 1e-4 * np.max(np.abs(expected))
     assert np.any(expected == 0.2)
+
+
+def test_an_offset_and_a_gain_change_the_input_samples_alone(msd_fmu: Path) -> None:
+    """No fine grid: the FMU runs as on a record of the changed samples, to the last bit."""
+    effects = (fx.InputOffset("f", _p("o")), fx.InputGain("f", _p("g")))
+    got = _predict(msd_fmu, effects, {"o": 0.3, "g": 1.2})
+    changed = experiment_from_arrays(
+        "e.csv", TIME, {"f": (FORCE + 0.3) * 1.2, "x": np.zeros(TIME.size)}
+    )
+    plain = FmuPredictor(msd_fmu, {"m": M, "k": K, "b": B}, ["f"]).predict({}, changed, ["x"])
+    np.testing.assert_array_equal(got, plain[:, 0])
+
+
+def test_changed_inputs_are_kept_by_the_effects_values(msd_fmu: Path) -> None:
+    """The same values give the same arrays (the run plan is reused); each result as uncached."""
+    exp = experiment_from_arrays("e.csv", TIME, {"f": FORCE, "x": np.zeros(TIME.size)})
+    effects = (fx.InputOffset("f", _p("o")), fx.InputLag("f", _p("tau")))
+
+    def predictor() -> AugmentedPredictor:
+        return AugmentedPredictor(FmuPredictor(msd_fmu, {"m": M, "k": K, "b": B}, ["f"]), effects)
+
+    kept = predictor()
+    first = kept._inputs({"o": 0.3, "tau": 0.2}, exp)
+    assert kept._inputs({"o": 0.3, "tau": 0.2}, exp)[1]["f"] is first[1]["f"]
+    assert kept._inputs({"o": 0.3, "tau": 0.5}, exp)[1]["f"] is not first[1]["f"]
+    for values in ({"o": 0.3, "tau": 0.2}, {"o": -0.1, "tau": 0.2}, {"o": 0.3, "tau": 0.2}):
+        np.testing.assert_array_equal(
+            kept.predict(values, exp, ["x"]), predictor().predict(values, exp, ["x"])
+        )

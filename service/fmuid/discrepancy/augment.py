@@ -13,8 +13,9 @@ biases and saturations act on the data rows.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
@@ -23,10 +24,16 @@ from fmuid.discrepancy.effects import Effect, InputDelay, OutputLag
 from fmuid.discrepancy.lag import first_order_lag
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.model.feedback import Feedback, fine_times
+from fmuid.model.kept import Kept, read_only
 from fmuid.model.registry import get_simulator
 
 FINE = 4
 """Fine-grid points per median data interval (input and output lags, clipping, feedback)."""
+
+RECENT = 8
+"""Changed inputs kept per experiment (:meth:`AugmentedPredictor._inputs`)."""
+
+T = TypeVar("T")
 
 
 def fine_step(time: np.ndarray) -> float:
@@ -55,11 +62,11 @@ class AugmentedPredictor:
     base: FmuPredictor
     effects: tuple[Effect, ...]
     step_scale: float = 1.0
-    _grids: dict[int, tuple[Experiment, np.ndarray, np.ndarray]] = field(default_factory=dict)
+    _kept: dict[tuple[str, int], tuple[Experiment, Any]] = field(default_factory=dict)
 
     def __getstate__(self) -> dict[str, object]:
-        """Pickle without the per-process grid cache."""
-        return {**self.__dict__, "_grids": {}}
+        """Pickle without the per-process caches."""
+        return {**self.__dict__, "_kept": {}}
 
     @property
     def model(self) -> object:
@@ -71,26 +78,38 @@ class AugmentedPredictor:
         """Names of the parameters the wrap consumes (not set on the FMU)."""
         return {n for e in self.effects if e.side != "fmu" for n in e.names}
 
+    def _per_experiment(self, kind: str, experiment: Experiment, make: Callable[[], T]) -> T:
+        """Return ``make()`` for an experiment, made once per process."""
+        key = (kind, id(experiment))
+        cached = self._kept.get(key)
+        if cached is None or cached[0] is not experiment:
+            cached = (experiment, make())
+            self._kept[key] = cached
+        return cast(T, cached[1])
+
+    def _step(self, experiment: Experiment) -> float:
+        """Return the experiment's fine step [s] (:func:`fine_step` times ``step_scale``)."""
+        return self._per_experiment(
+            "step", experiment, lambda: fine_step(experiment.time) * self.step_scale
+        )
+
     def _fine(self, experiment: Experiment) -> tuple[np.ndarray, np.ndarray]:
         """Fine grid holding every data row and input sample, and the rows' indices in it."""
-        cached = self._grids.get(id(experiment))
-        if cached is None or cached[0] is not experiment:
+
+        def make() -> tuple[np.ndarray, np.ndarray]:
             t = experiment.time
             input_time, _ = self.base.inputs_of(experiment)
             points = np.union1d(t, input_time[(input_time >= t[0]) & (input_time <= t[-1])])
-            grid = fine_times(points, fine_step(t) * self.step_scale)
-            cached = (experiment, grid, np.searchsorted(grid, t))
-            self._grids[id(experiment)] = cached
-        return cached[1], cached[2]
+            grid = fine_times(points, self._step(experiment))
+            return grid, np.searchsorted(grid, t)
+
+        return self._per_experiment("fine", experiment, make)
 
     def _input_grid(self, experiment: Experiment, input_time: np.ndarray) -> np.ndarray:
         """Return the fine grid joined with the input samples (kept per experiment)."""
-        key = -id(experiment)
-        cached = self._grids.get(key)
-        if cached is None or cached[0] is not experiment:
-            cached = (experiment, np.union1d(input_time, self._fine(experiment)[0]), input_time)
-            self._grids[key] = cached
-        return cached[1]
+        return self._per_experiment(
+            "inputs", experiment, lambda: np.union1d(input_time, self._fine(experiment)[0])
+        )
 
     @property
     def fine_inputs(self) -> bool:
@@ -108,12 +127,28 @@ class AugmentedPredictor:
     def _inputs(
         self, params: Mapping[str, float], experiment: Experiment
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Return the inputs the FMU sees, on a common grid."""
+        """Return the inputs the FMU sees, on a common grid.
+
+        The last :data:`RECENT` results are kept per experiment by the input effects' values,
+        the same arrays for the same values: a finite-difference Jacobian moves the other
+        parameters, and the simulator then reuses its run plan for these arrays.
+        """
         input_time, inputs = self.base.inputs_of(experiment)
         acting = sorted((e for e in self.effects if e.side == "input"), key=lambda e: e.order)
-        fine = self.fine_inputs
-        if not acting and not fine:
+        if not acting and not self.fine_inputs:
             return input_time, dict(inputs)
+        recent: Kept[tuple[np.ndarray, dict[str, np.ndarray]]] = self._per_experiment(
+            "recent", experiment, lambda: Kept(RECENT)
+        )
+        values = tuple(params[n] for e in acting for n in e.names)
+        return recent.get(values, lambda: self._changed(params, experiment, acting))
+
+    def _changed(
+        self, params: Mapping[str, float], experiment: Experiment, acting: list[Effect]
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Apply the input effects ``acting`` (in order) to the experiment's inputs."""
+        input_time, inputs = self.base.inputs_of(experiment)
+        fine = self.fine_inputs
         grid = self._input_grid(experiment, input_time)
         start = grid if fine else input_time
         times = {name: start for name in inputs}
@@ -128,10 +163,10 @@ class AugmentedPredictor:
             if t is not grid and not e.affine:
                 t, u = grid, np.interp(grid, t, u)
             times[e.target], values[e.target] = t, e.on_input(t, u, params)
-        if all(t is grid for t in times.values()):
-            return grid, values
-        common = np.unique(np.concatenate(list(times.values())))
-        return common, {n: np.interp(common, times[n], v) for n, v in values.items()}
+        if not all(t is grid for t in times.values()):
+            grid = np.unique(np.concatenate(list(times.values())))
+            values = {n: np.interp(grid, times[n], v) for n, v in values.items()}
+        return read_only(grid), {n: read_only(v) for n, v in values.items()}
 
     def predict(
         self, params: Mapping[str, float], experiment: Experiment, outputs: Sequence[str]
@@ -141,8 +176,7 @@ class AugmentedPredictor:
         fmu_params = {k: v for k, v in params.items() if k not in wrapped}
         input_time, inputs = self._inputs(params, experiment)
         terms = tuple(t for e in self.effects if e.side == "feedback" for t in e.terms(params))
-        step = fine_step(experiment.time) * self.step_scale
-        feedback = Feedback(terms, step) if terms else None
+        feedback = Feedback(terms, self._step(experiment)) if terms else None
         lags = [e for e in self.effects if isinstance(e, OutputLag)]
         out_time, rows = (
             self._fine(experiment) if lags else (experiment.time, np.arange(len(experiment.time)))
