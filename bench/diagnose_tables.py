@@ -116,7 +116,13 @@ def summary(rows: list[dict[str, Any]]) -> None:
         )
     if totals["controls"]:
         print(f"controls: {totals['alarms']} false alarms of {totals['controls']} (goal 0)")
-    print(f"{len(rows)} cases, median {median(rows, 'seconds'):.0f} s per diagnosis")
+    effects = [r for r in rows if r.get("effect") != "control"]
+    controls = [r for r in rows if r.get("effect") == "control"]
+    print(
+        f"{len(rows)} cases, median {median(rows, 'seconds'):.1f} s per diagnosis "
+        f"({len(effects)} effect cases {median(effects, 'seconds'):.1f} s, "
+        f"{len(controls)} controls {median(controls, 'seconds'):.1f} s)"
+    )
 
 
 def pct(k: int, n: int) -> str:
