@@ -1,6 +1,7 @@
 """Model discrimination: a sensor lag versus an input delay on the msd model."""
 
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -95,6 +96,25 @@ def test_one_hypothesis_against_several_equals_each_pair(proposal):
     assert both[1].trial == alone.trial
     assert both[1].separation == pytest.approx(alone.separation, rel=1e-9)
     assert both[1].hypotheses == ("output_lag", "slower_lag")
+
+
+def test_a_mapper_gets_the_answers_of_this_process(proposal):
+    """Screens and confirming fits run as tasks on pickled copies give the same proposals."""
+    spec, space, lag, delay, _ = proposal
+    slower = Hypothesis(
+        "slower_lag", lag.parameters, {**lag.values, "tau_outputs": TAU / 2}, lag.effects
+    )
+    tasks = []
+
+    def mapper(fn, *iterables):
+        tasks.append((fn.__name__, len(iterables[0])))
+        return [fn(*pickle.loads(pickle.dumps(args))) for args in zip(*iterables, strict=True)]
+
+    here = discriminating_experiments("msd", spec, space, lag, [delay, slower])
+    mapped = discriminating_experiments("msd", spec, space, lag, [delay, slower], mapper=mapper)
+    assert [d.to_dict() for d in mapped] == [d.to_dict() for d in here]
+    assert [name for name, _ in tasks] == ["_screen_test", "_full_separation"]
+    assert tasks[0][1] == here[0].screened and tasks[1][1] == 2 * 3  # the best 3 of each pair
 
 
 def test_discrimination_report_shows_both_predictions_and_the_numbers(proposal, tmp_path):

@@ -336,7 +336,9 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     rivals = [f for f, a in zip(fits, adjusted) if a <= opts.alpha]
     ties = decide.ties(best, rivals) if len(applied) == 1 else []
     tied = [{**t.to_dict(), "intervals": tie_intervals(run, t.fit)} for t in ties]
-    tests, no_test = settling_or_reason(problem, best, ties) if opts.discriminate else ([], "")
+    tests, no_test = (
+        settling_or_reason(problem, best, ties, run.mapper) if opts.discriminate else ([], "")
+    )
     for entry, test in zip(tied, tests):
         entry["expected_separation"] = round(test.expected_chi2, 4)
     rival = None

@@ -18,6 +18,7 @@ from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.discrepancy.decide import Tie
 from fmuid.discrepancy.scan import CandidateFit
 from fmuid.errors import FmuidError
+from fmuid.estimation.optimize import Mapper
 from fmuid.estimation.problem import Problem
 from fmuid.experiment_design.discriminate import (
     Discrimination,
@@ -63,7 +64,7 @@ def hypothesis(fit: CandidateFit, name: str | None = None) -> Hypothesis:
 
 
 def settling_tests(
-    problem: Problem, named: CandidateFit, ties: Sequence[Tie]
+    problem: Problem, named: CandidateFit, ties: Sequence[Tie], mapper: Mapper | None = None
 ) -> list[Discrimination]:
     """Return, per tie (the first :data:`MAX_TIES`), the test that best separates it.
 
@@ -75,6 +76,9 @@ def settling_tests(
         The named candidate's fit.
     ties
         Candidates the data cannot tell from it, strongest first.
+    mapper
+        Runs the tests' screens and fits side by side (the diagnosis's task engine; default:
+        this process).
 
     Returns
     -------
@@ -87,12 +91,12 @@ def settling_tests(
     a, *others = (hypothesis(f, name) for f, name in zip(fits, hypothesis_names(fits), strict=True))
     floor = float(stats.chi2.isf(SETTLES, 1)) / CONFIRM_BELOW
     return discriminating_experiments(
-        problem.fmu_path, problem.spec, space, a, others, confirm_from=floor
+        problem.fmu_path, problem.spec, space, a, others, confirm_from=floor, mapper=mapper
     )
 
 
 def settling_or_reason(
-    problem: Problem, named: CandidateFit, ties: Sequence[Tie]
+    problem: Problem, named: CandidateFit, ties: Sequence[Tie], mapper: Mapper | None = None
 ) -> tuple[list[Discrimination], str]:
     """Return :func:`settling_tests`, or none and the verdict's sentence when the search failed.
 
@@ -102,7 +106,7 @@ def settling_or_reason(
     if not ties:
         return [], ""
     try:
-        return settling_tests(problem, named, ties), ""
+        return settling_tests(problem, named, ties, mapper), ""
     except FmuidError as exc:
         log.warning("no test proposed to settle the tie: %s", exc)
         return [], f" No test to settle the tie was searched: {exc}."

@@ -10,17 +10,17 @@ misfit, the best few tests are confirmed with full fits.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
 from fmuid.data import ParameterSpec, Spec
 from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.discrepancy.effects import Effect
-from fmuid.estimation.optimize import fit_problem, jacobian
+from fmuid.estimation.optimize import Mapper, fit_problem, jacobian
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.schema import Written
@@ -40,6 +40,8 @@ from fmuid.progress import Progress, ProgressCallback
 
 CONFIRM = 3
 """Best screened tests confirmed with full fits."""
+
+R = TypeVar("R")
 
 
 @dataclass(frozen=True)
@@ -266,11 +268,14 @@ def discriminating_experiments(
     *,
     progress: ProgressCallback | None = None,
     confirm_from: float = 0.0,
+    mapper: Mapper | None = None,
 ) -> list[Discrimination]:
     """Propose, for each of ``others``, the test that best tells it from ``a``.
 
-    As :func:`discriminating_experiment` for each pair (A, B) of ``others``, with A's
-    predictions and sensitivities on each test computed once for all of them.
+    As :func:`discriminating_experiment` for each pair (A, B) of ``others``, with A's share
+    of each test's screen computed once for all of them. ``mapper`` runs the screens (a task
+    a test), then the confirming fits (a task a test and pair) side by side (default: in
+    this process, with ``progress`` after each test).
     """
     path = Path(resolve_fmu(fmu))
     trials = [
@@ -279,46 +284,72 @@ def discriminating_experiments(
         for s in space.sensor_sets()
     ]
     screen_a = _Screen(path, spec, space, a)
-    total = len(trials) * len(others)
-    found = []
-    for i, b in enumerate(others):
-        screen_b = _Screen(path, spec, space, b)
-        scored = []
+    screens = [_Screen(path, spec, space, b) for b in others]
+    n = len(trials)
+    if mapper is None:
+        screened = []
         for k, trial in enumerate(trials):
-            sep, _ = _separation(screen_a, screen_b, k, trial, full=False)
-            scored.append((min(sep.values()), k))
+            screened.append(_screen_test(screen_a, screens, k, trial))
             if progress:
-                done = i * len(trials) + k + 1
-                progress(Progress("discriminate", done, total, "linearised screen"))
-        found.append(_best(screen_a, screen_b, trials, scored, confirm_from))
+                progress(Progress("discriminate", k + 1, n, "linearised screen"))
+    else:
+        screened = mapper(_screen_test, [screen_a] * n, [screens] * n, range(n), trials)
+    ranked = [
+        sorted(((min(screened[k][i][0].values()), k) for k in range(n)), reverse=True)
+        for i in range(len(screens))
+    ]
+    confirm = [
+        (i, k) for i, r in enumerate(ranked) if r[0][0] >= confirm_from for _, k in r[:CONFIRM]
+    ]
+    full = (mapper or _serial)(
+        _full_separation,
+        [screen_a] * len(confirm),
+        [screens[i] for i, _ in confirm],
+        [k for _, k in confirm],
+        [trials[k] for _, k in confirm],
+    )
+    fitted = dict(zip(confirm, full, strict=True))
+    found = []
+    for i, r in enumerate(ranked):
+        best = max(
+            (fitted[(i, k)] for _, k in r[:CONFIRM] if (i, k) in fitted),
+            key=lambda f: min(f[0].values()),
+            default=None,
+        )
+        top = r[0][1]
+        (sep, pred), trial = (best[:2], best[2]) if best else (screened[top][i], trials[top])
+        found.append(
+            Discrimination(
+                trial,
+                (a.name, others[i].name),
+                sep,
+                output_times(trial),
+                pred,
+                space.input,
+                n,
+                {o: space.outputs[o].sigma for o in trial.outputs},
+                best is not None,
+            )
+        )
     return found
 
 
-def _best(
-    a: _Screen, b: _Screen, trials: list[Trial], scored: list[tuple[float, int]], floor: float
-) -> Discrimination:
-    """Return the best screened test, confirmed by full fits when it reaches ``floor``."""
-    scored = sorted(scored, reverse=True)
-    if scored[0][0] < floor:
-        k = scored[0][1]
-        trial = trials[k]
-        sep, pred = _separation(a, b, k, trial, full=False)
-        confirmed = False
-    else:
-        best: tuple[float, Trial, dict[str, float], dict[str, dict[str, np.ndarray]]] | None = None
-        for _, k in scored[:CONFIRM]:
-            sep, pred = _separation(a, b, k, trials[k], full=True)
-            if best is None or min(sep.values()) > best[0]:
-                best = (min(sep.values()), trials[k], sep, pred)
-        assert best is not None
-        _, trial, sep, pred = best
-        confirmed = True
-    space = a.space
-    sigma = {o: space.outputs[o].sigma for o in trial.outputs}
-    names = (a.hypothesis.name, b.hypothesis.name)
-    return Discrimination(
-        trial, names, sep, output_times(trial), pred, space.input, len(trials), sigma, confirmed
-    )
+def _screen_test(
+    a: _Screen, others: Sequence[_Screen], k: int, trial: Trial
+) -> list[tuple[dict[str, float], dict[str, dict[str, np.ndarray]]]]:
+    """Linearised separations of A from each of ``others`` on test ``k`` (a task)."""
+    return [_separation(a, b, k, trial, full=False) for b in others]
+
+
+def _full_separation(
+    a: _Screen, b: _Screen, k: int, trial: Trial
+) -> tuple[dict[str, float], dict[str, dict[str, np.ndarray]], Trial]:
+    """Separations of A and B on test ``k`` by full fits (a task)."""
+    return (*_separation(a, b, k, trial, full=True), trial)
+
+
+def _serial(fn: Callable[..., R], *iterables: Sequence[Any]) -> list[R]:
+    return [fn(*args) for args in zip(*iterables, strict=True)]
 
 
 def default_space(problem: Problem) -> Space:
