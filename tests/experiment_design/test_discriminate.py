@@ -98,6 +98,7 @@ def test_one_hypothesis_against_several_equals_each_pair(proposal):
     assert both[1].hypotheses == ("output_lag", "slower_lag")
 
 
+@pytest.mark.slow
 def test_a_mapper_gets_the_answers_of_this_process(proposal):
     """Screens and confirming fits run as tasks on pickled copies give the same proposals."""
     spec, space, lag, delay, _ = proposal

@@ -140,8 +140,9 @@ class AugmentedPredictor:
         recent: Kept[tuple[np.ndarray, dict[str, np.ndarray]]] = self._per_experiment(
             "recent", experiment, lambda: Kept(RECENT)
         )
-        values = tuple(params[n] for e in acting for n in e.names)
-        return recent.get(values, lambda: self._changed(params, experiment, acting))
+        key = tuple(params[n] for e in acting for n in e.names)
+        time, values = recent.get(key, lambda: self._changed(params, experiment, acting))
+        return time, dict(values)
 
     def _changed(
         self, params: Mapping[str, float], experiment: Experiment, acting: list[Effect]
