@@ -31,7 +31,11 @@ FINE = 4
 """Fine-grid points per median data interval (input and output lags, clipping, feedback)."""
 
 RECENT = 8
-"""Changed inputs kept per experiment (:meth:`AugmentedPredictor._inputs`)."""
+"""Changed inputs kept per experiment (:meth:`AugmentedPredictor._inputs`)..."""
+
+RECENT_BYTES = 64 * 2**20
+"""...within these array bytes (a long record on a refined fine grid makes arrays of tens of
+megabytes; the newest is kept whatever its size)."""
 
 T = TypeVar("T")
 
@@ -138,7 +142,7 @@ class AugmentedPredictor:
         if not acting and not self.fine_inputs:
             return input_time, dict(inputs)
         recent: Kept[tuple[np.ndarray, dict[str, np.ndarray]]] = self._per_experiment(
-            "recent", experiment, lambda: Kept(RECENT)
+            "recent", experiment, lambda: Kept(RECENT, RECENT_BYTES)
         )
         key = tuple(params[n] for e in acting for n in e.names)
         time, values = recent.get(key, lambda: self._changed(params, experiment, acting))
