@@ -10,16 +10,17 @@ misfit, the best few tests are confirmed with full fits.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 
 from fmuid.data import ParameterSpec, Spec
 from fmuid.discrepancy.augment import AugmentedPredictor
 from fmuid.discrepancy.effects import Effect
+from fmuid.discrepancy.scan import serial
 from fmuid.estimation.optimize import Mapper, fit_problem, jacobian
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
@@ -40,8 +41,6 @@ from fmuid.progress import Progress, ProgressCallback
 
 CONFIRM = 3
 """Best screened tests confirmed with full fits."""
-
-R = TypeVar("R")
 
 
 @dataclass(frozen=True)
@@ -173,16 +172,18 @@ class _Screen:
 
     Its noise-free prediction and the Jacobian of its weighted residuals (which, with the noise
     given by the space, does not depend on the data) serve every other hypothesis it is
-    compared with. Tests are known by their index in the list of the space's tests.
+    compared with. Tests are known by their index in the list of the space's tests. The FMU
+    travels as a model: a task's worker (a dask one too) finds its own copy of the file.
     """
 
     def __init__(self, fmu: Path, spec: Spec, space: Space, hypothesis: Hypothesis):
-        self.fmu, self.spec, self.space, self.hypothesis = fmu, spec, space, hypothesis
+        self.model, self.spec, self.space = model_of_file(fmu), spec, space
+        self.hypothesis = hypothesis
         self._clean: dict[int, dict[str, np.ndarray]] = {}
         self._jac: dict[int, np.ndarray] = {}
 
     def problem(self, trial: Trial, data: Mapping[str, np.ndarray] | None = None) -> Problem:
-        return self.hypothesis.problem(self.fmu, self.spec, self.space, trial, data)
+        return self.hypothesis.problem(self.model.path, self.spec, self.space, trial, data)
 
     def clean(self, k: int, trial: Trial) -> dict[str, np.ndarray]:
         """Its noise-free prediction of the samples of test ``k``."""
@@ -301,7 +302,7 @@ def discriminating_experiments(
     confirm = [
         (i, k) for i, r in enumerate(ranked) if r[0][0] >= confirm_from for _, k in r[:CONFIRM]
     ]
-    full = (mapper or _serial)(
+    full = (mapper or serial)(
         _full_separation,
         [screen_a] * len(confirm),
         [screens[i] for i, _ in confirm],
@@ -346,10 +347,6 @@ def _full_separation(
 ) -> tuple[dict[str, float], dict[str, dict[str, np.ndarray]], Trial]:
     """Separations of A and B on test ``k`` by full fits (a task)."""
     return (*_separation(a, b, k, trial, full=True), trial)
-
-
-def _serial(fn: Callable[..., R], *iterables: Sequence[Any]) -> list[R]:
-    return [fn(*args) for args in zip(*iterables, strict=True)]
 
 
 def default_space(problem: Problem) -> Space:
