@@ -145,14 +145,20 @@ class AugmentedPredictor:
             "recent", experiment, lambda: Kept(RECENT, RECENT_BYTES)
         )
         key = tuple(params[n] for e in acting for n in e.names)
-        time, values = recent.get(key, lambda: self._changed(params, experiment, acting))
+        time, values = recent.get(
+            key, lambda: self._changed(params, experiment, input_time, inputs, acting)
+        )
         return time, dict(values)
 
     def _changed(
-        self, params: Mapping[str, float], experiment: Experiment, acting: list[Effect]
+        self,
+        params: Mapping[str, float],
+        experiment: Experiment,
+        input_time: np.ndarray,
+        inputs: Mapping[str, np.ndarray],
+        acting: list[Effect],
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Apply the input effects ``acting`` (in order) to the experiment's inputs."""
-        input_time, inputs = self.base.inputs_of(experiment)
         fine = self.fine_inputs
         grid = self._input_grid(experiment, input_time)
         start = grid if fine else input_time
