@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import pickle
 from dataclasses import dataclass
 
 import numpy as np
 
-from fmuid.model.kept import Kept, array_bytes
+from fmuid.model.kept import Kept, PerObject, array_bytes
 
 
 @dataclass(frozen=True)
@@ -46,3 +47,36 @@ def test_the_count_bound_still_holds() -> None:
     for k in (1, 2, 3, 1):
         kept.get(k, lambda k=k: made.append(k) or k)
     assert made == [1, 2, 3, 1]
+
+
+def test_a_value_no_longer_valid_is_made_again() -> None:
+    source = np.arange(3.0)
+    kept: Kept[tuple[np.ndarray, np.ndarray]] = Kept(4)
+    made = []
+
+    def make() -> tuple[np.ndarray, np.ndarray]:
+        made.append(source.copy())
+        return source, source.copy()
+
+    def same(entry: tuple[np.ndarray, np.ndarray]) -> bool:
+        return bool(np.array_equal(entry[0], entry[1]))
+
+    first = kept.get(id(source), make, same)
+    assert kept.get(id(source), make, same) is first
+    source[0] = 7.0  # changed in place: the same id, other values
+    again = kept.get(id(source), make, same)
+    assert again is not first and again[1][0] == 7.0
+    assert len(made) == 2 and len(kept._values) == 1
+
+
+def test_values_per_object_go_by_identity_and_pickle_empty() -> None:
+    per = PerObject()
+    a, b = np.zeros(2), np.zeros(2)  # equal, but two objects
+    made = []
+    for obj in (a, b, a, b):
+        per.get(obj, lambda obj=obj: made.append(obj) or len(made))
+    assert per.get(a, lambda: 0) == 1 and per.get(b, lambda: 0) == 2
+    assert per.get(a, lambda: 9, kind="other") == 9
+    assert len(made) == 2
+    copy = pickle.loads(pickle.dumps(per))
+    assert copy.get(a, lambda: "new") == "new"

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from fmuid.errors import FmuError
-from fmuid.model import simulator
-from fmuid.model.kept import array_bytes
+from fmuid.model.kept import MAX_BYTES, array_bytes
 from fmuid.model.registry import get_simulator
 from fmuid.model.simulator import Simulator
 
@@ -128,16 +127,18 @@ def test_plan_reuse_sees_arrays_changed_in_place(tractor: Simulator) -> None:
     np.testing.assert_array_equal(doubled, fresh)
 
 
-def test_run_plans_stay_within_their_byte_bound(
-    tractor: Simulator, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_run_plans_stay_within_their_byte_bound(tractor: Simulator) -> None:
     """New input arrays at every run (an input effect) keep at most the plans the bound holds."""
-    tractor._plans.clear()
+    plans = tractor._plans
+    plans._values.clear()
     _ramp(tractor, {})
-    (one,) = tractor._plans.values()
-    assert one[3] == array_bytes(one[:3])
-    monkeypatch.setattr(simulator, "MAX_BYTES", int(2.5 * one[3]))
-    for k in range(5):
-        tractor.simulate({}, RAMP_TIME, {"delta": RAMP_DELTA + k}, OUTPUT_TIME, OUTS)
-    assert len(tractor._plans) == 2
-    assert all(e[3] == array_bytes(e[:3]) for e in tractor._plans.values())
+    ((one, size),) = plans._values.values()
+    assert size == array_bytes(one) > 0
+    plans.max_bytes = int(2.5 * size)
+    try:
+        for k in range(5):
+            tractor.simulate({}, RAMP_TIME, {"delta": RAMP_DELTA + k}, OUTPUT_TIME, OUTS)
+        assert len(plans._values) == 2
+        assert all(b == array_bytes(e) for e, b in plans._values.values())
+    finally:
+        plans.max_bytes = MAX_BYTES

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, TypeVar, cast
+from typing import TypeVar
 
 import numpy as np
 
@@ -24,7 +24,7 @@ from fmuid.discrepancy.effects import Effect, InputDelay, OutputLag
 from fmuid.discrepancy.lag import first_order_lag
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.model.feedback import Feedback, fine_times
-from fmuid.model.kept import Kept, read_only
+from fmuid.model.kept import Kept, PerObject, read_only
 from fmuid.model.registry import get_simulator
 
 FINE = 4
@@ -66,11 +66,7 @@ class AugmentedPredictor:
     base: FmuPredictor
     effects: tuple[Effect, ...]
     step_scale: float = 1.0
-    _kept: dict[tuple[str, int], tuple[Experiment, Any]] = field(default_factory=dict)
-
-    def __getstate__(self) -> dict[str, object]:
-        """Pickle without the per-process caches."""
-        return {**self.__dict__, "_kept": {}}
+    _kept: PerObject = field(default_factory=PerObject, compare=False, repr=False)
 
     @property
     def model(self) -> object:
@@ -84,12 +80,7 @@ class AugmentedPredictor:
 
     def _per_experiment(self, kind: str, experiment: Experiment, make: Callable[[], T]) -> T:
         """Return ``make()`` for an experiment, made once per process."""
-        key = (kind, id(experiment))
-        cached = self._kept.get(key)
-        if cached is None or cached[0] is not experiment:
-            cached = (experiment, make())
-            self._kept[key] = cached
-        return cast(T, cached[1])
+        return self._kept.get(experiment, make, kind)
 
     def _step(self, experiment: Experiment) -> float:
         """Return the experiment's fine step [s] (:func:`fine_step` times ``step_scale``)."""

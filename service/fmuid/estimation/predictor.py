@@ -12,6 +12,7 @@ from fmuid.data import Experiment
 from fmuid.estimation.per_experiment import for_experiment
 from fmuid.model.base import as_model
 from fmuid.model.fmu import FmuModel
+from fmuid.model.kept import PerObject
 from fmuid.model.registry import get_simulator
 
 
@@ -88,23 +89,17 @@ class FmuPredictor:
         self.fixed = dict(fixed)
         self.inputs = tuple(inputs)
         self.per_experiment = tuple(per_experiment)
-        self._inputs_cache: dict[int, tuple[Experiment, np.ndarray, dict[str, np.ndarray]]] = {}
-
-    def __getstate__(self) -> dict[str, object]:
-        """Pickle without the per-process input cache."""
-        state = dict(self.__dict__)
-        state["_inputs_cache"] = {}
-        return state
+        self._inputs = PerObject()
 
     def inputs_of(self, experiment: Experiment) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Return the experiment's inputs on their merged sample times (cached)."""
-        cached = self._inputs_cache.get(id(experiment))
-        if cached is None or cached[0] is not experiment:
+
+        def make() -> tuple[np.ndarray, dict[str, np.ndarray]]:
             variables = self.model.inputs
             held = [n for n in self.inputs if n in variables and not variables[n].is_continuous]
-            cached = (experiment, *merged_inputs(experiment, self.inputs, held))
-            self._inputs_cache[id(experiment)] = cached
-        return cached[1], cached[2]
+            return merged_inputs(experiment, self.inputs, held)
+
+        return self._inputs.get(experiment, make)
 
     def fmu_values(
         self, params: Mapping[str, float], experiment: Experiment

@@ -5,11 +5,12 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 from collections.abc import Callable, Hashable
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar, cast
 
 import numpy as np
 
 V = TypeVar("V")
+T = TypeVar("T")
 
 
 def content_key(*arrays: np.ndarray) -> tuple[tuple[int, ...], bytes]:
@@ -39,11 +40,19 @@ class Kept(Generic[V]):
         self.max_bytes = max_bytes
         self._values: dict[Hashable, tuple[V, int]] = {}
 
-    def get(self, key: Hashable, make: Callable[[], V]) -> V:
-        """Return the value kept for ``key``, made by ``make()`` the first time."""
+    def get(
+        self, key: Hashable, make: Callable[[], V], valid: Callable[[V], bool] | None = None
+    ) -> V:
+        """Return the value kept for ``key``, made by ``make()`` the first time.
+
+        A kept value for which ``valid`` is false is made again and replaces it as the newest
+        (a key by arrays' ids, whose contents may have changed in place since).
+        """
         kept = self._values.get(key)
         if kept is not None:
-            return kept[0]
+            if valid is None or valid(kept[0]):
+                return kept[0]
+            del self._values[key]
         value = make()
         self._values[key] = (value, array_bytes(value))
         while len(self._values) > 1 and (
@@ -52,6 +61,29 @@ class Kept(Generic[V]):
         ):
             self._values.pop(next(iter(self._values)))
         return value
+
+
+class PerObject:
+    """Values made once per live object, by its identity (an experiment of a study, say).
+
+    Kept by ``(kind, id(obj))`` together with the object, so that a new object at the id of a
+    dead one is not taken for it. What it holds is per process: it pickles empty.
+    """
+
+    def __init__(self) -> None:
+        self._values: dict[tuple[Hashable, int], tuple[object, Any]] = {}
+
+    def __reduce__(self) -> tuple[type[PerObject], tuple[()]]:
+        return PerObject, ()
+
+    def get(self, obj: object, make: Callable[[], T], kind: Hashable = None) -> T:
+        """Return the ``kind`` value of ``obj``, made by ``make()`` the first time."""
+        key = (kind, id(obj))
+        kept = self._values.get(key)
+        if kept is None or kept[0] is not obj:
+            kept = (obj, make())
+            self._values[key] = kept
+        return cast(T, kept[1])
 
 
 def array_bytes(value: object) -> int:

@@ -30,7 +30,7 @@ from fmuid.model.exchange import RTOL, run_model_exchange
 from fmuid.model.feedback import Feedback, feedback_inputs, fine_times, run_feedback
 from fmuid.model.fmu import USABLE, FmuModel, Variable
 from fmuid.model.instance import Instance
-from fmuid.model.kept import MAX_BYTES, array_bytes
+from fmuid.model.kept import Kept
 from fmuid.model.native import run_native_feedback
 from fmuid.model.plan import RunPlan, make_plan
 
@@ -38,8 +38,9 @@ logger = logging.getLogger(__name__)
 
 PLAN_CACHE = 32
 """Run plans kept per simulator (one per experiment of a study, typically), within the array
-bytes of :data:`~fmuid.model.kept.MAX_BYTES`: an input effect makes new input arrays at every
-run, and a long record's plans on a fine grid are tens of megabytes each."""
+bytes of :data:`~fmuid.model.kept.MAX_BYTES` (:class:`~fmuid.model.kept.Kept`): an input effect
+makes new input arrays at every run, and a long record's plans on a fine grid are tens of
+megabytes each."""
 
 
 class Simulator(SimulatorBase):
@@ -88,7 +89,7 @@ class Simulator(SimulatorBase):
         self.reset_reliable = reset_reliable
         self.native = True
         self._channels: dict[tuple[str, ...], Channels] = {}
-        self._plans: dict[tuple[object, ...], tuple[Any, ...]] = {}
+        self._plans: Kept[tuple[Any, ...]] = Kept(PLAN_CACHE)
 
     @property
     def instances(self) -> str:
@@ -281,24 +282,18 @@ class Simulator(SimulatorBase):
         arrays = (input_time, output_time, *sampled, *input_values.values())
         closed = None if feedback is None else (feedback.step, feedback.inputs)
         key = (tuple(input_values), closed, len(sampled), *map(id, arrays))
-        hit = self._plans.get(key)  # the arrays are kept alive there, so their ids are theirs
-        if hit is not None and all(map(np.array_equal, arrays, hit[1])):
-            return hit[2]
-        grid = np.asarray(output_time, dtype=float)
-        if feedback is not None:
-            input_values = feedback_inputs(feedback, input_time, dict(input_values))
-            grid = fine_times(grid, feedback.step)
-        plan = make_plan(input_time, input_values, inputs.variables, grid, sample_time)
-        copies = tuple(np.array(a, dtype=float, copy=True) for a in arrays)
-        size = array_bytes((arrays, copies, plan, grid))
-        entry = (arrays, copies, (plan, grid), size)
-        while self._plans and (
-            len(self._plans) >= PLAN_CACHE
-            or size + sum(e[3] for e in self._plans.values()) > MAX_BYTES
-        ):
-            self._plans.pop(next(iter(self._plans)))
-        self._plans[key] = entry
-        return plan, grid
+
+        def make() -> tuple[Any, ...]:
+            values, grid = input_values, np.asarray(output_time, dtype=float)
+            if feedback is not None:
+                values = feedback_inputs(feedback, input_time, dict(input_values))
+                grid = fine_times(grid, feedback.step)
+            plan = make_plan(input_time, values, inputs.variables, grid, sample_time)
+            return arrays, tuple(np.array(a, dtype=float, copy=True) for a in arrays), plan, grid
+
+        # the arrays are kept alive in the entry, so their ids are theirs; compared by value
+        entry = self._plans.get(key, make, lambda e: all(map(np.array_equal, arrays, e[1])))
+        return entry[2], entry[3]
 
     def _check_reset(
         self,
