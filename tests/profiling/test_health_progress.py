@@ -1,5 +1,5 @@
 """The health check says how many runs it makes and how long they take, and can be shortened;
-what it calls smooth."""
+what it calls smooth; it reads back from what it writes."""
 
 from __future__ import annotations
 
@@ -46,6 +46,7 @@ def test_progress_and_estimate_of_a_shortened_check(
     assert events[-1].detail.endswith(" 0 s left")
     assert any(f"health check: {total} runs of the 1 experiment(s)" in m for m in caplog.messages)
     assert health.smooth and set(health.jumps) == {"tau", "K"}
+    assert Health.of(health.to_dict()) == health  # as a later profile of the same point reuses it
 
 
 def test_noise_at_round_off_raises_the_step_but_leaves_the_objective_smooth():

@@ -15,6 +15,7 @@ from typing import Any
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
 from fmuid.profiling.engine import profile_problem
+from fmuid.profiling.health import Health
 from fmuid.profiling.result import ParameterProfile, ProfileResult
 from fmuid.profiling.walk import WalkOptions
 
@@ -71,6 +72,7 @@ def absorbed(
     workers: int,
     walk: WalkOptions,
     executor: Any = None,
+    health: Health | None = None,
 ) -> dict[str, Any]:
     """Profile the original parameters before and after; return the comparison.
 
@@ -86,7 +88,9 @@ def absorbed(
     makes. Every earlier stage measured the effect against these fits, so intervals around
     another optimum would not say what the term absorbs from them, and those re-fits start
     far from the data, where the simulations are slowest (about half of a diagnosis's time on
-    ``bench/diagnose.py``'s concealed cases).
+    ``bench/diagnose.py``'s concealed cases). ``health``: the health check of the augmented
+    model at ``augmented_fit``'s point, where the profile of the added parameters made it
+    there; the profile after reuses it (the same objective at the same point).
     """
     names = base.shared_names
     only = names if len(names) < base.n_free else None
@@ -95,6 +99,12 @@ def absorbed(
         base, base_fit, only=only, workers=workers, executor=executor, options=given
     )
     after = profile_problem(
-        augmented, augmented_fit, only=names, workers=workers, executor=executor, options=given
+        augmented,
+        augmented_fit,
+        only=names,
+        workers=workers,
+        executor=executor,
+        options=given,
+        health=health,
     )
     return compare(before, after, names)

@@ -62,6 +62,7 @@ from fmuid.estimation.series import residual_series as fit_series
 from fmuid.experiment_design.schema import DiscriminatingOut
 from fmuid.profiling.checks import CheckOptions
 from fmuid.profiling.engine import profile_problem
+from fmuid.profiling.health import Health
 from fmuid.profiling.walk import WalkOptions
 from fmuid.progress import ProgressCallback
 
@@ -314,7 +315,8 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
         confidence=opts.ci_confidence,
         executor=run.executor,
     )
-    final_fit = prof.fit
+    same = np.array_equal(prof.fit.z_estimate(), final_fit.z_estimate())
+    final_fit, health = prof.fit, Health.of(prof.checks["health"]) if same else None
     estimates = added_estimates(prof, added, opts.ci_confidence)
     run.report("profiles of the added parameters")
     run.lap("profiles")
@@ -322,7 +324,7 @@ def _diagnose(run: Run, fit: FitResult | None, test_data: Sequence[Experiment]) 
     if opts.absorbed:
         at_study = augmented(problem, applied, step_scale(aug))
         absorbed_by = absorbed(
-            problem, fit, at_study, final_fit, opts.workers, opts.walk, run.executor
+            problem, fit, at_study, final_fit, opts.workers, opts.walk, run.executor, health
         )
         run.report("profiles of the original parameters before and after")
         run.lap("absorbed")

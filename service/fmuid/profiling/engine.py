@@ -58,6 +58,7 @@ def profile_problem(
     progress: ProgressCallback | None = None,
     options: WalkOptions = WalkOptions(),
     confidence: float | None = None,
+    health: Health | None = None,
 ) -> ProfileResult:
     """Profile likelihoods of the free parameters around a fit.
 
@@ -92,6 +93,10 @@ def profile_problem(
         Walk, end and check settings.
     confidence
         Level of the intervals (default: the spec's ``confidence``).
+    health
+        The health check of this objective at ``fit``'s estimate, where one was made already
+        (a profile of the same model and data from the same fit: the diagnosis's profiles of
+        the added parameters and of the original ones after); else it is made here.
 
     Returns
     -------
@@ -102,7 +107,7 @@ def profile_problem(
     conf = problem.spec.confidence if confidence is None else confidence
     with counting() as count:
         fit, profiles, better_found, check, checks = _profiles(
-            problem, fit, only, workers, executor, progress, options, conf
+            problem, fit, only, workers, executor, progress, options, conf, health
         )
     if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
         fit = replace(fit, fmu_info=fmu_summary(problem.model))
@@ -130,13 +135,18 @@ def _profiles(
     progress: ProgressCallback | None,
     options: WalkOptions,
     conf: float,
+    known: Health | None,
 ) -> tuple[FitResult, dict[str, ParameterProfile], bool, dict[str, Any], dict[str, Any]]:
     """Run :func:`profile_problem`'s steps; return the fit, profiles, better-found and checks."""
     thr = thresholds(conf, problem.n_free)
     names = list(only) if only is not None else list(problem.names)
     better_found = False
-    health = check_health(
-        problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
+    health = (
+        replace(known, simulations=0)
+        if known is not None
+        else check_health(
+            problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
+        )
     )
     if health.diff_step > options.refit.diff_step:
         options = replace(options, refit=replace(options.refit, diff_step=health.diff_step))

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
 
 import numpy as np
 
@@ -86,6 +88,13 @@ class Health(Written):
     no_effect: tuple[str, ...] = ()
 
     schema = HealthOut
+
+    @classmethod
+    def of(cls, written: Mapping[str, Any]) -> Health:
+        """Return the health check written as ``written`` (its ``to_dict``)."""
+        names = {f.name for f in fields(cls)}
+        kept = {k: v for k, v in written.items() if k in names}
+        return cls(**{**kept, "no_effect": tuple(kept.get("no_effect", ()))})
 
     @property
     def smooth(self) -> bool:

@@ -132,7 +132,7 @@ class StructuralCheckOut(Block):
 
 
 class HealthOut(Block):
-    """The objective's health check before the profiles (:class:`~.health.HealthCheck`)."""
+    """The objective's health check before the profiles (:class:`~.health.Health`)."""
 
     smooth: bool
     deterministic: bool
