@@ -1,4 +1,4 @@
-"""Values kept by the content of the arrays they were made from (per-process caches)."""
+"""Per-process caches: values kept by key (the content or the ids of arrays), or per live object."""
 
 from __future__ import annotations
 
