@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import fmuid.engine.local as local_engine
 from fmuid.data import experiment_from_arrays, spec_from_json
 from fmuid.discrepancy import DiagnoseOptions, diagnose
 
@@ -54,12 +55,23 @@ def _comparable(result: dict) -> dict:  # type: ignore[type-arg]
 
 
 @pytest.mark.slow
-def test_two_workers_give_the_same_diagnosis(msd_fmu: Path) -> None:
+def test_two_workers_give_the_same_diagnosis(
+    msd_fmu: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    opened: list[int] = []
+    real = local_engine.local_pool
+
+    def recorded(workers, *args, **kwargs):  # type: ignore[no-untyped-def]
+        opened.append(workers)
+        return real(workers, *args, **kwargs)
+
+    monkeypatch.setattr(local_engine, "local_pool", recorded)
     data = [offset_record()]
     results = []
     for workers in (1, 2):
         opts = DiagnoseOptions(workers=workers, absorbed=False, discriminate=False)
         results.append(_comparable(diagnose(msd_fmu, data, SPEC, options=opts).to_dict()))
+    assert opened == [2]  # one pool for the scan and the profiles: its workers start once
     one, two = results
     assert one["mismatch"] and one["effect"] == "input_offset"
     assert [name for name, _ in one["stages"]] == [

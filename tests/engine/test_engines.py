@@ -1,6 +1,8 @@
-"""The engines give the same results, events and counts: in this process and in two workers."""
+"""The engines give the same results, events and counts: in this process and in two workers;
+a pool's workers learn the owner's verdict on the FMU's reset at every run."""
 
 import os
+import shutil
 from dataclasses import dataclass
 
 import pytest
@@ -8,6 +10,7 @@ import pytest
 from fmuid.engine.count import counted, counting
 from fmuid.engine.run import open_engine
 from fmuid.model.fmu import FmuModel
+from fmuid.model.registry import mark_reset_unreliable, registry
 
 
 @dataclass(frozen=True)
@@ -95,3 +98,26 @@ def test_a_run_stops_at_the_first_task_in_order_whose_result_says_so(msd_fmu):
     ):
         remote, remote_asked, _, _ = _stopped(model, executor=client)
     assert remote == here and remote_asked == asked
+
+
+@dataclass(frozen=True)
+class ResetVerdict:
+    """Returns whether this process takes the FMU's reset as unreliable."""
+
+    model: FmuModel
+
+    def execute(self, report):
+        return registry().reset_unreliable(self.model.key)
+
+
+def test_a_pool_learns_a_reset_verdict_made_after_it_started(msd_fmu, tmp_path):
+    copy = tmp_path / msd_fmu.name  # its own key: this process's verdict on msd stays as it is
+    shutil.copy(msd_fmu, copy)
+    model = FmuModel(copy)
+    tasks = [ResetVerdict(model)] * 2
+    with open_engine(model, workers=2, at_most=2) as engine:
+        before = engine.run(tasks)
+        mark_reset_unreliable(model)  # as a health check does between a diagnosis's stages
+        after = engine.run(tasks)
+    assert before == [False, False]
+    assert after == [True, True]

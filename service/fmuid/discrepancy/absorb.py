@@ -80,8 +80,8 @@ def absorbed(
     record, it would double the profiles for every record added and says nothing of the physics.
 
     ``augmented`` must be set at the study's confidence (its added parameters are free but not
-    profiled). ``executor``: a ``dask.distributed.Client`` to run the branches on (as the
-    diagnosis's other profiles), else ``workers`` local processes.
+    profiled). ``executor``: the diagnosis's task engine (or a ``dask.distributed.Client``) to
+    run the branches on, as the diagnosis's other profiles; else ``workers`` local processes.
 
     The two fits are profiled as the diagnosis made them: no re-fits of the base fit from
     diverse starts (``CheckOptions.fit_starts``), which the profile of a whole-model fit

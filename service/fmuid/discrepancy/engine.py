@@ -192,8 +192,8 @@ def diagnose_problem(
     common = augmented(problem, [])
     if common.predictor is not problem.predictor:
         problem, fit = common, None if fit is None else refit(common, fit)
-    with candidate_pool(problem, options.workers, executor) as mapper, counting() as count:
-        run = Run(problem, options, progress, count, mapper, executor)
+    with candidate_pool(problem, options.workers, executor) as engine, counting() as count:
+        run = Run(problem, options, progress, count, engine.map, engine)
         return _diagnose(run, fit, test_data)
 
 

@@ -69,7 +69,9 @@ class Run:
     """State of one diagnosis: the problem, options, progress and the cost of each stage.
 
     ``count`` is open around the whole diagnosis (:func:`fmuid.engine.count.counting`): it
-    counts what this process simulates and the counts of the tasks run elsewhere.
+    counts what this process simulates and the counts of the tasks run elsewhere. ``mapper``
+    and ``executor``: the ``map`` of the diagnosis's task engine and the engine itself, which
+    the profiles run their branches on (:func:`fmuid.discrepancy.tasks.candidate_pool`).
     """
 
     def __init__(

@@ -11,8 +11,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-from fmuid.discrepancy.scan import Mapper
 from fmuid.engine.run import open_engine
+from fmuid.engine.task import Engine
 from fmuid.estimation.problem import Problem
 
 PRELOAD = (
@@ -24,13 +24,15 @@ PRELOAD = (
 
 
 @contextmanager
-def candidate_pool(problem: Problem, workers: int, executor: Any = None) -> Iterator[Mapper]:
-    """Yield a :data:`~fmuid.discrepancy.scan.Mapper` over a dask client or local processes.
+def candidate_pool(problem: Problem, workers: int, executor: Any = None) -> Iterator[Engine]:
+    """Yield the diagnosis's task engine over a dask client or local processes.
 
     ``executor`` (a ``dask.distributed.Client``) when given, else ``workers`` local processes
-    (1: this one). The first local pool of a process starts its forkserver, and only that
-    pool's modules are preloaded: the scan's pool also preloads those of the diagnosis's later
-    pools (the profiles, the search for a settling test), whose workers then start with them.
+    (1: this one). Its ``map`` is the scan's :data:`~fmuid.discrepancy.scan.Mapper`, and the
+    diagnosis's profiles and search for a settling test run on it too: a local pool's workers
+    start once and keep their FMU instance warm across the diagnosis (a pool per profile
+    started its processes anew: about 1 s of a diagnosis with look-alikes to profile). The
+    pool preloads the modules of all those tasks.
     """
     with open_engine(problem.model, workers=workers, executor=executor, preload=PRELOAD) as engine:
-        yield engine.map
+        yield engine

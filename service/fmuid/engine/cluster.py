@@ -93,7 +93,6 @@ class DaskEngine(Engine):
         self._client = client
         self._model = model
         self._blob = model.data
-        self._unreliable = get_simulator(model).reset_reliable is False
 
     def run(
         self,
@@ -107,13 +106,14 @@ class DaskEngine(Engine):
         from distributed import as_completed
 
         model = self._model
+        unreliable = get_simulator(model).reset_reliable is False  # the verdict of this run
         futures = [
             self._client.submit(
                 execute_anywhere,
                 PickledTask(model.file, pickle.dumps(task)),
                 model.sha256,
                 self._blob,
-                self._unreliable,
+                unreliable,
                 key=f"{label(task)}-{uuid.uuid4().hex}",
             )
             for task in tasks

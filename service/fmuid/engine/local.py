@@ -34,6 +34,8 @@ _POLL = 0.2
 
 _events: Any = None
 """In a pool worker: the pipe to the owner (set by :func:`_init_worker`)."""
+_model: FmuModel | None = None
+"""In a pool worker: the FMU its tasks simulate (set by :func:`_init_worker`)."""
 
 
 class SerialEngine(Engine):
@@ -69,29 +71,35 @@ def _init_worker(events: Any, owner: int, fmu: FmuFile, unreliable: bool) -> Non
 
     The worker's FMU registry is closed when the worker ends (its simulators' files deleted).
     """
-    global _events
+    global _events, _model
     die_with_pool_owner(owner)
     close_at_exit()
-    model = load_model(fmu)
+    _model = load_model(fmu)
     if unreliable:
-        mark_reset_unreliable(model)
+        mark_reset_unreliable(_model)
     _events = events
 
 
-def _execute(run: int, k: int, task: Task[R]) -> R:
+def _execute(run: int, k: int, task: Task[R], unreliable: bool) -> R:
     """Execute task ``k`` of run ``run`` in a pool worker; its events go to the owner tagged.
 
     The run's number in the tag keeps a task of a run stopped early, still reporting, out of a
-    later run's events.
+    later run's events. ``unreliable``: the owner's verdict on the FMU's reset when the run
+    began (a health check may have found it unreliable since the pool started).
     """
+    if unreliable and _model is not None:
+        mark_reset_unreliable(_model)
     return task.execute(lambda event: _events.put((run, k, event)))
 
 
 class PoolEngine(Engine):
     """Run the tasks in ``workers`` local worker processes (open it with :meth:`open`)."""
 
-    def __init__(self, pool: ProcessPoolExecutor, events: Any, workers: int) -> None:
+    def __init__(
+        self, pool: ProcessPoolExecutor, events: Any, workers: int, model: FmuModel
+    ) -> None:
         self._pool = pool
+        self._model = model
         self._events = events
         self.workers = workers
         self._abandoned: list[Future[Any]] = []
@@ -112,7 +120,7 @@ class PoolEngine(Engine):
         events = multiprocessing.get_context("forkserver").SimpleQueue()
         initargs = (events, os.getpid(), model.file, unreliable)
         with local_pool(workers, _init_worker, initargs, preload=[__name__, *preload]) as pool:
-            engine = cls(pool, events, workers)
+            engine = cls(pool, events, workers, model)
             yield engine
             if any(not f.done() for f in engine._abandoned):
                 stop_pool(pool, logging.INFO)
@@ -135,8 +143,10 @@ class PoolEngine(Engine):
 
         """
         self._runs += 1
+        unreliable = get_simulator(self._model).reset_reliable is False
         futures: dict[Future[R], int] = {
-            self._pool.submit(_execute, self._runs, k, task): k for k, task in enumerate(tasks)
+            self._pool.submit(_execute, self._runs, k, task, unreliable): k
+            for k, task in enumerate(tasks)
         }
         results: dict[int, R] = {}
         pending = set(futures)

@@ -35,13 +35,17 @@ def open_engine(
     workers
         Local worker processes (``None`` or 0: the CPU count); 1 runs the tasks in this process.
     executor
-        A ``dask.distributed.Client``; overrides ``workers``.
+        A ``dask.distributed.Client``, or an engine already open (a diagnosis's, whose workers
+        have started: its tasks' simulations are counted by it); overrides ``workers``.
     at_most
         The number of tasks, when known: no more workers are started.
     preload
         Modules the local workers' forkserver imports once (those defining the tasks).
 
     """
+    if isinstance(executor, Engine):
+        yield executor
+        return
     if executor is not None:
         yield CountingEngine(DaskEngine(executor, model))
         return

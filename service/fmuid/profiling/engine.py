@@ -86,7 +86,8 @@ def profile_problem(
     workers
         Local worker processes; 1 runs in this process.
     executor
-        A ``dask.distributed.Client`` to run branches on instead of local processes.
+        A ``dask.distributed.Client`` to run branches on instead of local processes, or an
+        engine already open (:class:`fmuid.engine.task.Engine`: a diagnosis's pool).
     progress
         Receives ``Progress("profile", done, total, detail)`` after every point.
     options
