@@ -80,6 +80,11 @@ class CountingEngine(Engine):
     def __init__(self, engine: Engine) -> None:
         self._engine = engine
 
+    @property
+    def parallel(self) -> bool:
+        """Whether the wrapped engine runs its tasks side by side."""
+        return self._engine.parallel
+
     def run(
         self,
         tasks: Sequence[Task[R]],

@@ -41,6 +41,11 @@ _model: FmuModel | None = None
 class SerialEngine(Engine):
     """Run the tasks one after the other in this process."""
 
+    @property
+    def parallel(self) -> bool:
+        """False: the tasks run here, one after the other."""
+        return False
+
     def run(
         self,
         tasks: Sequence[Task[R]],

@@ -72,6 +72,11 @@ def label(task: Task[Any]) -> str:
 class Engine(ABC):
     """Runs tasks and returns their results in the order given."""
 
+    @property
+    def parallel(self) -> bool:
+        """Whether the tasks run side by side, not one after the other in this process."""
+        return True
+
     @abstractmethod
     def run(
         self,

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
-from fmuid.engine.run import open_engine
+from fmuid.engine.task import Engine
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import FitResult
 from fmuid.profiling.branch import BranchResult, BranchTask
@@ -20,15 +19,14 @@ def walk_all(
     fit: FitResult,
     names: Sequence[str],
     thr: dict[str, float],
-    workers: int | None,
-    executor: Any,
+    engine: Engine,
     progress: ProgressCallback | None,
     options: WalkOptions,
     valleys: Sequence[np.ndarray],
     restart: bool,
     again: dict[tuple[int, int], np.ndarray] | None = None,
 ) -> list[BranchResult]:
-    """Walk every branch of ``names``; return the branches in the order of the tasks.
+    """Walk every branch of ``names`` on ``engine``; return the branches in the order of the tasks.
 
     With ``restart`` (a lower point will restart the profiles) the walks stop at the first
     branch, in that order, that found one: the branches before it and that one are returned.
@@ -78,15 +76,7 @@ def walk_all(
                     parts.append(f"{name} {got}/{planned}")
             progress(Progress("profile", sum(done.values()), total, ", ".join(parts)))
 
-    with open_engine(
-        problem.model,
-        workers=workers,
-        executor=executor,
-        at_most=len(tasks),
-        preload=["fmuid.profiling.branch"],
-    ) as engine:
-        until = _found_lower if restart else None
-        return engine.run(tasks, on_event=on_point, until=until)
+    return engine.run(tasks, on_event=on_point, until=_found_lower if restart else None)
 
 
 def _found_lower(k: int, branch: BranchResult) -> bool:

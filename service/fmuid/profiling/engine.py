@@ -13,6 +13,8 @@ import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
 from fmuid.engine.count import counting
+from fmuid.engine.run import open_engine
+from fmuid.engine.task import Engine
 from fmuid.estimation.optimize import jacobian
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.result import Cost, FitResult
@@ -106,9 +108,19 @@ def profile_problem(
     """
     t0, fit0 = time.perf_counter(), fit
     conf = problem.spec.confidence if confidence is None else confidence
-    with counting() as count:
+    names = list(only) if only is not None else list(problem.names)
+    with (
+        counting() as count,
+        open_engine(
+            problem.model,
+            workers=workers,
+            executor=executor,
+            at_most=2 * len(names),
+            preload=["fmuid.profiling.branch"],
+        ) as engine,
+    ):
         fit, profiles, better_found, check, checks = _profiles(
-            problem, fit, only, workers, executor, progress, options, conf, health
+            problem, fit, only, engine, progress, options, conf, health
         )
     if fit.fmu_info:  # the health check may have found the reset unreliable since the fit
         fit = replace(fit, fmu_info=fmu_summary(problem.model))
@@ -131,8 +143,7 @@ def _profiles(
     problem: Problem,
     fit: FitResult,
     only: Sequence[str] | None,
-    workers: int | None,
-    executor: Any,
+    engine: Engine,
     progress: ProgressCallback | None,
     options: WalkOptions,
     conf: float,
@@ -146,7 +157,12 @@ def _profiles(
         replace(known, simulations=0)
         if known is not None
         else check_health(
-            problem, fit.z_estimate(), fit.jacobian, progress, options.checks.health_grid
+            problem,
+            fit.z_estimate(),
+            fit.jacobian,
+            progress,
+            options.checks.health_grid,
+            engine.map if engine.parallel else None,
         )
     )
     if health.diff_step > options.refit.diff_step:
@@ -187,8 +203,7 @@ def _profiles(
             fit,
             names,
             thr,
-            workers,
-            executor,
+            engine,
             progress,
             options,
             valleys,

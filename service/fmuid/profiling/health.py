@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
@@ -12,7 +12,7 @@ import numpy as np
 
 from fmuid.engine.count import counted, counting
 from fmuid.errors import FmuError, FmuidError
-from fmuid.estimation.optimize import safe_residuals
+from fmuid.estimation.optimize import Mapper, safe_residuals
 from fmuid.estimation.predictor import FmuPredictor
 from fmuid.estimation.problem import Problem
 from fmuid.estimation.schema import Written
@@ -153,6 +153,7 @@ def check_health(
     jacobian: np.ndarray,
     progress: ProgressCallback | None = None,
     grid_side: int = GRID_SIDE,
+    mapper: Mapper | None = None,
 ) -> Health:
     """Probe the objective around the estimate.
 
@@ -172,6 +173,10 @@ def check_health(
     grid_side
         Grid points on each side of the estimate along each parameter (``GRID_SIDE``; fewer
         make a shorter check for slow FMUs; below 3 no jumps are looked for).
+    mapper
+        Runs the probes of each parameter as a task (a profile's engine: ``map``), the same
+        runs as here; then one progress event follows them all. The runs at the estimate and
+        the check of the reset stay in this process.
 
     Returns
     -------
@@ -186,7 +191,7 @@ def check_health(
 
     """
     with counting() as count:
-        health = _check(problem, z_hat, jacobian, progress, grid_side)
+        health = _check(problem, z_hat, jacobian, progress, grid_side, mapper)
     return replace(health, simulations=count.simulations)
 
 
@@ -196,35 +201,39 @@ def _check(
     jacobian: np.ndarray,
     progress: ProgressCallback | None,
     grid_side: int,
+    mapper: Mapper | None,
 ) -> Health:
     """Run :func:`check_health`'s measurements (its simulations not counted here)."""
     no_effect = ignored_parameters(problem, z_hat, jacobian)
     fresh = _fresh_matches(problem, z_hat)  # first: the rest sees fresh instances if need be
-    residuals = _Meter(problem, 2 + len(problem.names) * (4 + 2 * grid_side), progress)
+    probes = [_probes(problem, z_hat, jacobian, i, grid_side) for i in range(problem.n_free)]
+    residuals = _Meter(problem, 2 + sum(len(p.points) for p in probes), progress)
     r0 = residuals(z_hat)
     deterministic = bool(np.array_equal(r0, residuals(z_hat)))
+    if mapper is None:
+        rows = [[residuals(z) for z in p.points] for p in probes]
+    else:
+        rows = mapper(residual_rows, [problem] * len(probes), [p.points for p in probes])
+        residuals.done += sum(len(r) for r in rows)
+        if progress is not None:
+            progress(Progress("health", residuals.done, residuals.total, "probes run as tasks"))
     noise: dict[str, float] = {}
     jumps: dict[str, int] = {}
     chi2_noise: dict[str, float] = {}
     steps = [PROBE_STEP]
-    lo, hi = problem.z_lower, problem.z_upper
     with np.errstate(over="ignore", invalid="ignore"):  # outputs that overflow at wide bounds
-        for i, name in enumerate(problem.names):
-            scale = max(1.0, abs(float(z_hat[i])))
-            h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
-            rows = [r0] + [residuals(_moved(z_hat, i, k * h)) for k in range(1, 5)]
-            fourth = rows[0] - 4 * rows[1] + 6 * rows[2] - 4 * rows[3] + rows[4]
+        for name, probe, got in zip(problem.names, probes, rows, strict=True):
+            moved = [r0, *got[:4]]
+            fourth = moved[0] - 4 * moved[1] + 6 * moved[2] - 4 * moved[3] + moved[4]
             noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
-            slope = np.sqrt(np.mean(((rows[1] - rows[0]) / h) ** 2))
+            slope = np.sqrt(np.mean(((moved[1] - moved[0]) / probe.h) ** 2))
             if noise[name] > 0 and slope > 0:
-                steps.append(SIGNAL_TO_NOISE * noise[name] / slope / scale)
-            norm = float(np.linalg.norm(jacobian[:, i]))
-            d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
-            grid = np.clip(z_hat[i] + d * np.arange(-grid_side, grid_side + 1), lo[i], hi[i])
-            grid = np.unique(grid)
-            rows = [r0 if g == z_hat[i] else residuals(_at(z_hat, i, g)) for g in grid]
-            chi2 = np.array([float(r @ r) for r in rows])
-            jumps[name], chi2_noise[name] = _departures(grid, chi2)
+                steps.append(SIGNAL_TO_NOISE * noise[name] / slope / probe.scale)
+            along = iter(got[4:])
+            chi2 = np.array(
+                [float(r @ r) for r in (r0 if at else next(along) for at in probe.at_estimate)]
+            )
+            jumps[name], chi2_noise[name] = _departures(probe.grid, chi2)
     return Health(
         deterministic=deterministic,
         reset_matches_fresh=fresh,
@@ -234,6 +243,41 @@ def _check(
         diff_step=float(min(max(steps), MAX_DIFF_STEP)),
         no_effect=no_effect,
     )
+
+
+@dataclass(frozen=True)
+class _Probes:
+    """The points of one parameter's probes: four noise steps of ``h``, then its grid.
+
+    ``at_estimate`` marks the grid values equal to the estimate (their run is the one there).
+    """
+
+    h: float
+    scale: float
+    grid: np.ndarray
+    at_estimate: tuple[bool, ...]
+    points: list[np.ndarray]
+
+
+def _probes(
+    problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray, i: int, grid_side: int
+) -> _Probes:
+    """Return parameter ``i``'s probe points: the noise steps and the grid along it alone."""
+    lo, hi = problem.z_lower, problem.z_upper
+    scale = max(1.0, abs(float(z_hat[i])))
+    h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
+    norm = float(np.linalg.norm(jacobian[:, i]))
+    d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
+    grid = np.unique(np.clip(z_hat[i] + d * np.arange(-grid_side, grid_side + 1), lo[i], hi[i]))
+    at = tuple(bool(g == z_hat[i]) for g in grid)
+    points = [_moved(z_hat, i, k * h) for k in range(1, 5)]
+    points += [_at(z_hat, i, g) for g, here in zip(grid, at, strict=True) if not here]
+    return _Probes(h, scale, grid, at, points)
+
+
+def residual_rows(problem: Problem, points: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """Return the weighted residuals at each point (a failed run: its penalty); a task's work."""
+    return [safe_residuals(problem, z) for z in points]
 
 
 def ignored_parameters(
