@@ -113,7 +113,7 @@ def test_crashing_and_hanging_fmus_fail_only_their_job(service_factory, broken_f
 def test_profile_on_dask_local_cluster_equals_local_pool(service_factory, step_csv, direct_profile):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     ) as cluster:
         service = service_factory(FMUID_DASK_SCHEDULER=cluster.scheduler_address)
         client = service.client()

@@ -97,7 +97,7 @@ def test_a_dask_cluster_gives_the_local_diagnosis(msd_fmu: Path) -> None:
     local = diagnose(msd_fmu, data, SPEC, options=opts).to_dict()
     assert local["absorbed"]
     with LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     ) as cluster:
         with Client(cluster) as client:
             remote = diagnose(msd_fmu, data, SPEC, options=opts, executor=client).to_dict()

@@ -93,7 +93,7 @@ def test_a_run_stops_at_the_first_task_in_order_whose_result_says_so(msd_fmu):
     pooled, pooled_asked, _, _ = _stopped(model, workers=2)
     assert pooled == here and pooled_asked == asked
     with (
-        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster,
         Client(cluster) as client,
     ):
         remote, remote_asked, _, _ = _stopped(model, executor=client)

@@ -33,7 +33,7 @@ def test_a_dask_cluster_of_worker_processes_gives_the_serial_result(serial, msd_
 
     with (
         LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
         ) as cluster,
         Client(cluster) as client,
     ):

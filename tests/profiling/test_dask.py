@@ -27,7 +27,7 @@ def test_dask_local_cluster_matches_local_pool(msd_fmu):
     s = spec(TRUTH, 0.3)
     local = fmuid.profile(msd_fmu, [data], s, workers=2)
     with LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     ) as cluster:
         with Client(cluster) as client:
             remote = fmuid.profile(msd_fmu, [data], s, executor=client)
