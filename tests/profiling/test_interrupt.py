@@ -74,7 +74,7 @@ def _interruptible() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-def _workers_of(proc: subprocess.Popen[str], timeout: float = 300.0) -> list[int]:
+def workers_of(proc: subprocess.Popen[str], timeout: float = 300.0) -> list[int]:
     """Wait until the script's pool has its two workers; return their pids."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -105,7 +105,7 @@ def test_sigint_stops_a_two_worker_stage_and_its_workers(tractor_fmu, tmp_path, 
     )
     assert proc.stdout is not None and proc.stdin is not None
     try:
-        _workers_of(proc)
+        workers_of(proc)
         proc.send_signal(signal.SIGINT)  # what a notebook's interrupt does: the kernel alone
         sent = time.monotonic()
         line = proc.stdout.readline()
