@@ -71,17 +71,16 @@ class SerialEngine(Engine):
         return results
 
 
-def _init_worker(events: Any, owner: int, fmu: FmuFile, unreliable: bool) -> None:
-    """Set up a pool worker: die with the owner, parse the FMU once, know its reset verdict.
+def _init_worker(events: Any, owner: int, fmu: FmuFile) -> None:
+    """Set up a pool worker: die with the owner, parse the FMU once.
 
     The worker's FMU registry is closed when the worker ends (its simulators' files deleted).
+    The owner's verdict on the FMU's reset comes with every task (:func:`_execute`).
     """
     global _events, _model
     die_with_pool_owner(owner)
     close_at_exit()
     _model = load_model(fmu)
-    if unreliable:
-        mark_reset_unreliable(_model)
     _events = events
 
 
@@ -121,9 +120,8 @@ class PoolEngine(Engine):
         On any exception the workers are ended at once (:func:`fmuid.engine.pool.local_pool`);
         so are they on leaving while tasks of a run stopped early still run.
         """
-        unreliable = get_simulator(model).reset_reliable is False
         events = multiprocessing.get_context("forkserver").SimpleQueue()
-        initargs = (events, os.getpid(), model.file, unreliable)
+        initargs = (events, os.getpid(), model.file)
         with local_pool(workers, _init_worker, initargs, preload=[__name__, *preload]) as pool:
             engine = cls(pool, events, workers, model)
             yield engine

@@ -146,6 +146,12 @@ class _Meter:
             )
         return r
 
+    def ran(self, runs: int, detail: str) -> None:
+        """Count ``runs`` made elsewhere (as tasks); report them as one step."""
+        self.done += runs
+        if self.progress is not None:
+            self.progress(Progress("health", self.done, self.total, detail))
+
 
 def check_health(
     problem: Problem,
@@ -214,15 +220,13 @@ def _check(
         rows = [[residuals(z) for z in p.points] for p in probes]
     else:
         rows = mapper(residual_rows, [problem] * len(probes), [p.points for p in probes])
-        residuals.done += sum(len(r) for r in rows)
-        if progress is not None:
-            progress(Progress("health", residuals.done, residuals.total, "probes run as tasks"))
+        residuals.ran(sum(len(r) for r in rows), "probes run as tasks")
     noise: dict[str, float] = {}
     jumps: dict[str, int] = {}
     chi2_noise: dict[str, float] = {}
     steps = [PROBE_STEP]
     with np.errstate(over="ignore", invalid="ignore"):  # outputs that overflow at wide bounds
-        for name, probe, got in zip(problem.names, probes, rows, strict=True):
+        for i, (name, probe, got) in enumerate(zip(problem.names, probes, rows, strict=True)):
             moved = [r0, *got[:4]]
             fourth = moved[0] - 4 * moved[1] + 6 * moved[2] - 4 * moved[3] + moved[4]
             noise[name] = float(np.sqrt(np.mean(fourth**2) / 70.0))
@@ -231,7 +235,7 @@ def _check(
                 steps.append(SIGNAL_TO_NOISE * noise[name] / slope / probe.scale)
             along = iter(got[4:])
             chi2 = np.array(
-                [float(r @ r) for r in (r0 if at else next(along) for at in probe.at_estimate)]
+                [float(r @ r) for r in (r0 if g == z_hat[i] else next(along) for g in probe.grid)]
             )
             jumps[name], chi2_noise[name] = _departures(probe.grid, chi2)
     return Health(
@@ -247,32 +251,27 @@ def _check(
 
 @dataclass(frozen=True)
 class _Probes:
-    """The points of one parameter's probes: four noise steps of ``h``, then its grid.
-
-    ``at_estimate`` marks the grid values equal to the estimate (their run is the one there).
-    """
+    """The points of one parameter's probes: four noise steps of ``h``, then its grid."""
 
     h: float
     scale: float
     grid: np.ndarray
-    at_estimate: tuple[bool, ...]
     points: list[np.ndarray]
 
 
 def _probes(
     problem: Problem, z_hat: np.ndarray, jacobian: np.ndarray, i: int, grid_side: int
 ) -> _Probes:
-    """Return parameter ``i``'s probe points: the noise steps and the grid along it alone."""
+    """Return parameter ``i``'s probes: noise steps, its grid (no run at the estimate itself)."""
     lo, hi = problem.z_lower, problem.z_upper
     scale = max(1.0, abs(float(z_hat[i])))
     h = PROBE_STEP * scale * (1.0 if z_hat[i] + 4 * PROBE_STEP * scale <= hi[i] else -1.0)
     norm = float(np.linalg.norm(jacobian[:, i]))
     d = min(0.5 / norm if norm > 0 else np.inf, GRID_SPAN * (hi[i] - lo[i]))
     grid = np.unique(np.clip(z_hat[i] + d * np.arange(-grid_side, grid_side + 1), lo[i], hi[i]))
-    at = tuple(bool(g == z_hat[i]) for g in grid)
     points = [_moved(z_hat, i, k * h) for k in range(1, 5)]
-    points += [_at(z_hat, i, g) for g, here in zip(grid, at, strict=True) if not here]
-    return _Probes(h, scale, grid, at, points)
+    points += [_at(z_hat, i, g) for g in grid if g != z_hat[i]]
+    return _Probes(h, scale, grid, points)
 
 
 def residual_rows(problem: Problem, points: Sequence[np.ndarray]) -> list[np.ndarray]:
